@@ -1,0 +1,5 @@
+import sys
+
+from hdrjax.cli import main
+
+sys.exit(main())

@@ -1,0 +1,43 @@
+"""Shared pieces of the command line: error types and argument parsers."""
+
+import argparse
+
+
+class CLIError(Exception):
+    """An error reported as one line on stderr; ``exit_code`` is the process status."""
+
+    exit_code = 1
+
+
+class UsageError(CLIError):
+    """Bad arguments (exit code 2, like argparse)."""
+
+    exit_code = 2
+
+
+class DataError(CLIError):
+    """Bad or unreadable data (exit code 1)."""
+
+    exit_code = 1
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite float > 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (v > 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return v
+
+
+def value_range(text: str) -> tuple[float, float]:
+    """argparse type: ``LO:HI`` with LO < HI."""
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LO:HI, got {text!r}") from None
+    if not lo < hi:
+        raise argparse.ArgumentTypeError(f"expected LO < HI, got {text!r}")
+    return lo, hi
