@@ -1,11 +1,22 @@
-"""hdrjax: JIT-compiled, differentiable HDR tone mapping and analysis in JAX."""
+"""hdrjax: JIT-compiled, differentiable HDR tone mapping and analysis in JAX.
 
-from . import _stats as stats
+Numeric contract: images are linear-light RGB, channels last ``(..., H, W, 3)``, relative or
+absolute (cd/m²); operators return display-referred linear RGB, nominally [0, 1], which
+:func:`hdrjax.display.encode` turns into sRGB. float32 by default, float64 with x64 enabled.
+"""
+
+from . import _stats as stats, display as display, operators as operators
 from ._colour import (
     REC709_CHROMATICITIES as REC709_CHROMATICITIES,
     REC709_WEIGHTS as REC709_WEIGHTS,
     luminance as luminance,
     luminance_weights as luminance_weights,
+)
+from .operators import (
+    get_operator as get_operator,
+    make_operator as make_operator,
+    operator_names as operator_names,
+    tonemap as tonemap,
 )
 
 __version__ = "0.1.0"

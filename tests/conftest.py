@@ -1,5 +1,6 @@
 """Test configuration: strict rank promotion, named tolerances, data locations."""
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -24,15 +25,22 @@ def shared_file(name: str) -> Path:
     return p
 
 
-@pytest.fixture
-def x64():
-    """Enable float64 for the duration of a test."""
+@contextlib.contextmanager
+def enable_x64(on: bool = True):
+    """Context manager: float64 on (or off) inside the block."""
     old = jax.config.jax_enable_x64
-    jax.config.update("jax_enable_x64", True)
+    jax.config.update("jax_enable_x64", on)
     try:
         yield
     finally:
         jax.config.update("jax_enable_x64", old)
+
+
+@pytest.fixture
+def x64():
+    """Enable float64 for the duration of a test."""
+    with enable_x64():
+        yield
 
 
 os.environ.setdefault("HDRJAX_CACHE", "0")

@@ -1,0 +1,83 @@
+"""``hdrjax info INPUT``: size, layers, luminance statistics and estimated parameters."""
+
+import argparse
+
+from ._cmd_tonemap import describe, eqx_jit_measure, load_rgb
+from ._common import positive_float
+
+ESTIMATING = ("reinhard2002", "reinhard2002_local", "tumblin_reinhard", "linear")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "info",
+        help="print size, layers, luminance statistics and estimated operator parameters",
+        description="Describe an HDR image: size, channels and layers, luminance statistics "
+        "(min, percentiles, log-average, max, dynamic range in stops) and the parameters "
+        "each operator would estimate from it.",
+    )
+    p.add_argument("input", help="HDR image: .exr, .hdr or .pfm")
+    p.add_argument("--scale", type=positive_float, default=1.0,
+                   help="multiply the input by this factor first")
+    p.add_argument("--exact", action="store_true",
+                   help="exact (sorted) percentiles instead of the histogram estimate")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from .. import luminance
+    from .._stats import measure, percentile
+    from ..operators import get_operator, operator_names
+
+    img, rgb = load_rgb(args.input, args.scale)
+    h, w = rgb.shape[:2]
+    chans = img.image.shape[-1] if img.image.ndim == 3 else 1
+    print(f"file: {args.input}")
+    print(f"size: {w} x {h}, {chans} channel(s) in the main image")
+    layers = getattr(img, "layers", {}) or {}
+    if layers:
+        print("layers: " + ", ".join(f"{k} {tuple(np.shape(v))}" for k, v in layers.items()))
+    unit = getattr(img, "unit", None)
+    if unit:
+        print(f"unit: {unit}")
+    wts = img.luminance_weights
+    print("luminance weights: (" + ", ".join(f"{v:.5f}" for v in wts) + ")")
+    L = luminance(jnp.asarray(rgb), wts)
+    method = "exact" if args.exact else "histogram"
+    st = jax.jit(lambda x: measure(x, method=method))(jnp.where(jnp.isfinite(L), L, jnp.nan))
+    qs = jnp.array([1.0, 5.0, 50.0, 95.0, 99.0])
+    ps, err = jax.jit(lambda x: percentile(x, qs, method=method))(L)
+    n_bad = int(st.n_nonfinite)
+    print("luminance (finite pixels):")
+    print(f"  min {float(st.min):.6g}   min>0 {float(st.min_positive):.6g}"
+          f"   max {float(st.max):.6g}")
+    names = ("p1", "p5", "median", "p95", "p99")
+    print("  " + "   ".join(f"{n} {float(v):.6g}" for n, v in zip(names, ps, strict=True))
+          + (f"   (histogram, rel. error <= {float(err):.2g})" if method == "histogram" else ""))
+    print(f"  log-average {float(st.log_average):.6g}   dynamic range"
+          f" {float(st.dynamic_range_stops):.2f} stops")
+    print(f"  non-positive pixels {int(st.n_pixels - st.n_positive - st.n_nonfinite)},"
+          f" NaN/Inf pixels {n_bad}")
+    print("estimated parameters:")
+    for name in ESTIMATING:
+        op = get_operator(name)()
+        if "weights" in {f.name for f in dataclasses.fields(op)}:
+            op = dataclasses.replace(op, weights=wts)
+        measured = eqx_jit_measure(op, jnp.asarray(rgb))
+        text = describe(measured).splitlines()
+        keep = [ln for ln in text[1:] if ln.split(":")[0].strip() in op.unset()]
+        print(f"  {name}: " + ", ".join(s.strip() for s in keep))
+    auto = get_operator("reinhard2002_auto")()
+    from ..operators._base import prepare
+
+    use_local = bool(jax.jit(lambda x: auto.use_local(prepare(x, wts)))(jnp.asarray(rgb)))
+    print(f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
+          f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)")
+    print("operators: " + ", ".join(operator_names()))
+    return 0

@@ -1,0 +1,42 @@
+"""Tone-mapping operators: equinox Modules, a registry and the ``tonemap`` dispatcher.
+
+Numeric contract: input is linear-light RGB ``(..., H, W, 3)`` (relative, or cd/m² where an
+operator says so); output is display-referred linear RGB, nominally [0, 1], before display
+encoding (:mod:`hdrjax.display`). Every operator works under ``jit``, ``vmap`` and ``grad``.
+"""
+
+from ._base import (
+    AbstractLuminanceCurve as AbstractLuminanceCurve,
+    AbstractOperator as AbstractOperator,
+    get_operator as get_operator,
+    make_operator as make_operator,
+    operator_names as operator_names,
+    parameter_names as parameter_names,
+    register as register,
+    tonemap as tonemap,
+)
+from ._classic import (
+    Exponential as Exponential,
+    ExponentiationMapping as ExponentiationMapping,
+    Filmic as Filmic,
+    Gamma as Gamma,
+    Logarithmic as Logarithmic,
+    LogarithmicMapping as LogarithmicMapping,
+    Normalisation as Normalisation,
+    Reinhard2004 as Reinhard2004,
+    Schlick1994 as Schlick1994,
+    Simple as Simple,
+)
+from ._linear import (
+    Q_FACTOR as Q_FACTOR,
+    Linear as Linear,
+    ev100_luminance as ev100_luminance,
+    saturation_luminance as saturation_luminance,
+)
+from ._reinhard2002 import Reinhard2002 as Reinhard2002
+from ._reinhard2002_local import (
+    Reinhard2002Auto as Reinhard2002Auto,
+    Reinhard2002Local as Reinhard2002Local,
+)
+from ._tabulated import Tabulated as Tabulated
+from ._tumblin import Tumblin1999 as Tumblin1999, TumblinReinhard as TumblinReinhard

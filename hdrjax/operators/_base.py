@@ -1,0 +1,311 @@
+"""Operator base class, parameter handling, the registry and the ``tonemap`` dispatcher.
+
+Every operator is an equinox Module: array fields are parameters (``None`` meaning "measure
+this image"), static fields are settings. Calling an operator on ``(..., H, W, 3)`` linear RGB
+returns display-referred linear RGB (nominally [0, 1], not yet clipped or encoded; see
+:mod:`hdrjax.display`). Leading batch axes are mapped with ``jax.vmap`` so statistics are
+per frame and results do not depend on the batch shape; use :meth:`AbstractOperator.measure`
+to share measured parameters across frames or tiles.
+
+Bad pixels: a pixel with a NaN channel is NaN in the output (all channels; it never reaches
+its neighbours or the statistics), a pixel whose luminance is +Inf is display white (1.0), and
+one whose luminance is -Inf or ≤ 0 is black. Statistics use finite pixels only.
+"""
+
+import abc
+import math
+import dataclasses
+import re
+from collections.abc import Callable
+from typing import Any, ClassVar, TypeVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._colour import REC709_WEIGHTS, luminance
+from .._stats import DEFAULT_BINS, LuminanceStats, measure
+
+_Op = TypeVar("_Op", bound="AbstractOperator")
+
+
+def param(x: ArrayLike | None) -> Array | None:
+    """Field converter: numbers become arrays of the default float dtype (so ``jit`` traces
+    them instead of recompiling per value); ``None`` stays ``None`` (measure the image)."""
+    if x is None:
+        return None
+    x = jnp.asarray(x)
+    if not jnp.issubdtype(x.dtype, jnp.floating):
+        x = x.astype(jnp.result_type(float))
+    return x
+
+
+def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
+    return eqx.field(static=True, default=default, converter=lambda w: tuple(float(v) for v in w))
+
+
+def as_float_image(rgb: ArrayLike) -> Array:
+    """Validate ``(..., H, W, 3)`` and promote to float32/float64 (float16/ints → float32)."""
+    rgb = jnp.asarray(rgb)
+    if rgb.ndim < 3 or rgb.shape[-1] != 3:
+        raise ValueError(f"rgb: expected an image of shape (..., H, W, 3), got {rgb.shape}")
+    if not jnp.issubdtype(rgb.dtype, jnp.floating) or rgb.dtype in (jnp.float16, jnp.bfloat16):
+        rgb = rgb.astype(jnp.result_type(float))
+    return rgb
+
+
+class Prepared(eqx.Module):
+    """An image split into what operators compute on and what marks its bad pixels."""
+
+    rgb: Array  # non-finite pixels replaced by 0
+    L: Array  # luminance of ``rgb``
+    L_stats: Array  # luminance with NaN at non-finite pixels: statistics skip them
+    has_nan: Array
+    inf_sign: Array  # +1 where luminance is +Inf, -1 for -Inf, 0 otherwise
+
+
+def prepare(rgb: Array, weights: tuple[float, float, float]) -> Prepared:
+    finite = jnp.all(jnp.isfinite(rgb), axis=-1)
+    has_nan = jnp.any(jnp.isnan(rgb), axis=-1)
+    safe = jnp.where(finite[..., None], rgb, 0.0)
+    L = luminance(safe, weights)
+    inf_l = luminance(jnp.where(jnp.isinf(rgb), jnp.sign(rgb), 0.0), weights)
+    inf_sign = jnp.where(finite | has_nan, 0.0, jnp.sign(inf_l))
+    return Prepared(safe, L, jnp.where(finite, L, jnp.nan), has_nan, inf_sign)
+
+
+def finish(p: Prepared, out: Array) -> Array:
+    """Put the bad pixels back: NaN stays NaN, +Inf luminance is white, -Inf is black."""
+    bad = jnp.where(p.inf_sign > 0, 1.0, 0.0)[..., None]
+    out = jnp.where((p.inf_sign != 0)[..., None], bad.astype(out.dtype), out)
+    return jnp.where(p.has_nan[..., None], jnp.nan, out)
+
+
+def luminance_floor(dtype) -> float:
+    """Smallest luminance whose square is a normal float (1.1e-19 in float32)."""
+    return math.sqrt(float(np.finfo(dtype).tiny)) * 10.0
+
+
+def scale_by_luminance(rgb: Array, L: Array, curve: Callable[[Array], Array]) -> Array:
+    """``C_out = C_in · L_d / L_w`` with ``L_d = curve(L_w)`` (colour ratios kept).
+
+    Pixels with ``L_w ≤ 0`` are black. Below :func:`luminance_floor` the ratio is evaluated
+    at the floor, which keeps gradients finite for luminances down to 1e-30 in float32.
+    """
+    pos = L > 0
+    Lc = jnp.maximum(jnp.where(pos, L, 1.0), luminance_floor(L.dtype))
+    ratio = jnp.where(pos, curve(Lc) / Lc, 0.0)
+    return rgb * ratio[..., None]
+
+
+def safe_log(x: Array) -> Array:
+    """``ln x`` for x > 0, 0 elsewhere, with finite gradients everywhere."""
+    pos = x > 0
+    return jnp.where(pos, jnp.log(jnp.where(pos, x, 1.0)), 0.0)
+
+
+class AbstractOperator(eqx.Module):
+    """A tone-mapping operator: linear RGB in, display-referred linear RGB out.
+
+    Subclasses implement :meth:`_measure` (fill ``None`` parameters from image statistics)
+    and :meth:`_apply` (map one prepared image with all parameters known).
+    """
+
+    name: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def _measure(self: _Op, p: Prepared) -> _Op:
+        """Return a copy with every ``None`` parameter estimated from the image."""
+
+    @abc.abstractmethod
+    def _apply(self, p: Prepared) -> Array:
+        """Map one image (``(H, W, 3)``) whose parameters are all set."""
+
+    @property
+    def weights_(self) -> tuple[float, float, float]:
+        return getattr(self, "weights", REC709_WEIGHTS)
+
+    def measure(self: _Op, rgb: Float[ArrayLike, "H W 3"]) -> _Op:
+        """The operator with every unset (``None``) parameter estimated from ``rgb``.
+
+        Pass one image (``(H, W, 3)``); for a shared estimate over several frames, measure
+        a representative frame or a mosaic of them.
+        """
+        rgb = as_float_image(rgb)
+        if rgb.ndim != 3:
+            raise ValueError(f"measure: expected one image (H, W, 3), got shape {rgb.shape}")
+        return self._measure(prepare(rgb, self.weights_))
+
+    def __call__(self, rgb: Float[ArrayLike, "*batch H W 3"]) -> Float[Array, "*batch H W 3"]:
+        rgb = as_float_image(rgb)
+        if rgb.ndim > 3:
+            return jax.vmap(self.__call__)(rgb)
+        p = prepare(rgb, self.weights_)
+        return finish(p, self._measure(p)._apply(p))
+
+    def unset(self) -> tuple[str, ...]:
+        """Names of the parameters that will be measured from the image."""
+        return tuple(
+            f.name
+            for f in dataclasses.fields(self)
+            if not f.metadata.get("static", False) and getattr(self, f.name) is None
+        )
+
+    def parameters(self) -> dict[str, Any]:
+        """All fields as Python values (floats for scalar parameters), for printing."""
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, jax.Array) and v.ndim == 0:
+                v = float(v)
+            out[f.name] = v
+        return out
+
+
+def stats_of(p: Prepared, *, method: str = "histogram", bins: int = DEFAULT_BINS) -> LuminanceStats:
+    """Statistics of a prepared image (its finite pixels); unused ones are removed by XLA."""
+    return measure(p.L_stats, method=method, bins=bins)  # type: ignore[arg-type]
+
+
+# ----------------------------------------------------------------------------- registry
+
+_REGISTRY: dict[str, type[AbstractOperator]] = {}
+
+
+def _key(name: str) -> str:
+    return re.sub(r"[\s_\-]", "", name.lower())
+
+
+def register(name: str) -> Callable[[type[_Op]], type[_Op]]:
+    """Class decorator adding an operator to the registry under ``name``."""
+
+    def deco(cls: type[_Op]) -> type[_Op]:
+        cls.name = name
+        _REGISTRY[_key(name)] = cls
+        return cls
+
+    return deco
+
+
+def operator_names() -> tuple[str, ...]:
+    """Registered operator names, sorted."""
+    return tuple(sorted(cls.name for cls in _REGISTRY.values()))
+
+
+def get_operator(name: str) -> type[AbstractOperator]:
+    """The operator class registered under ``name`` (case and ``_``/``-`` insensitive)."""
+    try:
+        return _REGISTRY[_key(name)]
+    except KeyError:
+        raise ValueError(
+            f"method: unknown operator {name!r}; valid: {', '.join(operator_names())}"
+        ) from None
+
+
+def parameter_names(cls: type[AbstractOperator]) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls) if f.init)
+
+
+def make_operator(method: str, **params: Any) -> AbstractOperator:
+    """Instantiate a registered operator; unknown parameters raise ``ValueError``."""
+    cls = get_operator(method)
+    valid = parameter_names(cls)
+    bad = sorted(set(params) - set(valid))
+    if bad:
+        raise ValueError(
+            f"{cls.name}: unknown parameter(s) {', '.join(bad)}; valid: {', '.join(valid)}"
+        )
+    return cls(**params)
+
+
+@eqx.filter_jit
+def _apply_jit(op: AbstractOperator, rgb: Array) -> Array:
+    return op(rgb)
+
+
+def tonemap(
+    rgb: Float[ArrayLike, "*batch H W 3"], method: str = "reinhard2002", **params: Any
+) -> Float[Array, "*batch H W 3"]:
+    """Tone-map linear RGB with a registered operator (jit-compiled, differentiable).
+
+    Args:
+        rgb: linear-light RGB, channels last, ``(..., H, W, 3)``; relative or cd/m²
+            (operators that need absolute units say so).
+        method: registry name, case- and separator-insensitive (see :func:`operator_names`).
+        **params: the operator's parameters; ``None`` or omitted means "estimate from the
+            image" where the operator supports it.
+
+    Returns:
+        Display-referred linear RGB, nominally in [0, 1]; encode with
+        :func:`hdrjax.display.encode`.
+
+    Raises:
+        ValueError: unknown ``method`` or parameter (the message lists the valid ones), or an
+            image that is not ``(..., H, W, 3)``.
+
+    >>> import jax.numpy as jnp, hdrjax
+    >>> out = hdrjax.tonemap(jnp.ones((2, 2, 3)), method="linear", L_max=2.0)
+    >>> float(out[0, 0, 0])
+    0.5
+    """
+    op = make_operator(method, **params)
+    return _apply_jit(op, as_float_image(rgb))
+
+
+__all__ = [
+    "AbstractOperator",
+    "Prepared",
+    "finish",
+    "get_operator",
+    "make_operator",
+    "operator_names",
+    "param",
+    "prepare",
+    "register",
+    "safe_log",
+    "scale_by_luminance",
+    "stats_of",
+    "tonemap",
+    "weights_field",
+]
+
+
+def max_luminance(p: Prepared) -> Array:
+    """Largest finite luminance (at least the smallest normal float, so it can divide)."""
+    m = jnp.max(jnp.where(jnp.isnan(p.L_stats), -jnp.inf, p.L))
+    return jnp.where(jnp.isfinite(m) & (m > 0), m, 1.0)
+
+
+def min_luminance(p: Prepared) -> Array:
+    """Smallest finite luminance (0 when no pixel is finite)."""
+    m = jnp.min(jnp.where(jnp.isnan(p.L_stats), jnp.inf, p.L))
+    return jnp.where(jnp.isfinite(m), m, 0.0)
+
+
+def log_average(p: Prepared, eps: float) -> Array:
+    """``exp(mean(ln(max(L, 0) + eps)))`` over the finite pixels."""
+    finite = ~jnp.isnan(p.L_stats)
+    terms = jnp.log(jnp.maximum(jnp.where(finite, p.L, 1.0), 0.0) + eps)
+    return jnp.exp(jnp.sum(jnp.where(finite, terms, 0.0)) / jnp.maximum(jnp.sum(finite), 1))
+
+
+class AbstractLuminanceCurve(AbstractOperator):
+    """An operator that maps luminance through a curve and keeps colour ratios."""
+
+    @abc.abstractmethod
+    def _curve(self, L: Array) -> Array:
+        """Display luminance of world luminance ``L ≥ 0`` (parameters all set)."""
+
+    def _apply(self, p: Prepared) -> Array:
+        return scale_by_luminance(p.rgb, p.L, self._curve)
+
+    def curve(self, L: ArrayLike) -> Array:
+        """The luminance curve alone, for plotting or inspection (parameters must be set)."""
+        missing = self.unset()
+        if missing:
+            raise ValueError(
+                f"{self.name}: measure an image first; unset parameters: {', '.join(missing)}"
+            )
+        return self._curve(jnp.maximum(jnp.asarray(L, jnp.result_type(float)), 0.0))

@@ -1,0 +1,280 @@
+"""The classic global operators of colour-hdri, so its users can switch.
+
+Each class computes the same function as colour-hdri's ``tonemapping_operator_<Name>``
+(``colour_hdri/tonemapping/global_operators/operators.py``; tests compare them to 1e-7 in
+float64), with the image statistics it uses (``L_max``, the log-average, channel means)
+exposed as optional parameters measured on the finite pixels when ``None``. Differences on
+inputs colour-hdri cannot handle: negative channel values are clamped to 0 in the
+per-channel operators (colour-hdri returns NaN or divides by zero), pixels with ``L ≤ 0``
+are black, and NaN/Inf pixels follow :mod:`hdrjax.operators` rules instead of spreading
+through the statistics.
+
+References: Schlick 1994 (https://doi.org/10.1007/978-3-642-87825-1_2), Reinhard & Devlin
+2005 (https://doi.org/10.1109/TVCG.2005.9), Hable 2010 (filmic, "Uncharted 2"), and the
+colour-hdri documentation for the simple/normalisation/gamma/logarithmic/exponential
+operators.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from ._base import (
+    AbstractLuminanceCurve,
+    AbstractOperator,
+    Prepared,
+    log_average,
+    max_luminance,
+    min_luminance,
+    param,
+    register,
+    weights_field,
+)
+
+EPSILON = float(jnp.finfo(jnp.float64).eps)
+"""colour-hdri's ``EPSILON`` (float64 machine epsilon) inside its log-average."""
+
+
+def _set(op, **values):
+    """Copy of ``op`` with the given ``None`` fields replaced."""
+    names = tuple(values)
+    return eqx.tree_at(lambda o: tuple(getattr(o, n) for n in names), op,
+                       tuple(values[n] for n in names), is_leaf=lambda x: x is None)
+
+
+class _MaxNormalised(AbstractLuminanceCurve):
+    """Operators whose only statistic is the largest luminance ``L_max``."""
+
+    def _measure(self, p: Prepared):
+        if getattr(self, "L_max") is not None:
+            return self
+        return _set(self, L_max=max_luminance(p))
+
+
+@register("simple")
+class Simple(AbstractOperator):
+    """``RGB / (RGB + 1)`` per channel (colour-hdri ``tonemapping_operator_simple``)."""
+
+    def _measure(self, p: Prepared) -> "Simple":
+        return self
+
+    def _apply(self, p: Prepared) -> Array:
+        c = jnp.maximum(p.rgb, 0.0)
+        return c / (c + 1.0)
+
+
+@register("normalisation")
+class Normalisation(_MaxNormalised):
+    """``RGB / L_max`` (colour-hdri ``tonemapping_operator_normalisation``)."""
+
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _curve(self, L: Array) -> Array:
+        return L / self.L_max
+
+
+@register("gamma")
+class Gamma(AbstractOperator):
+    """``(2^EV · RGB)^(1/gamma)`` per channel (colour-hdri ``tonemapping_operator_gamma``)."""
+
+    gamma: Array = eqx.field(default=1.0, converter=param)
+    EV: Array = eqx.field(default=0.0, converter=param)
+
+    def _measure(self, p: Prepared) -> "Gamma":
+        return self
+
+    def _apply(self, p: Prepared) -> Array:
+        c = jnp.exp2(self.EV) * jnp.maximum(p.rgb, 0.0)
+        pos = c > 0
+        return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, c, 1.0)) / self.gamma), 0.0)
+
+
+@register("logarithmic")
+class Logarithmic(_MaxNormalised):
+    """``log10(1 + q L) / log10(1 + k L_max)``, q, k ≥ 1 (colour-hdri ``..._logarithmic``)."""
+
+    q: Array = eqx.field(default=1.0, converter=param)
+    k: Array = eqx.field(default=1.0, converter=param)
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _curve(self, L: Array) -> Array:
+        q, k = jnp.maximum(self.q, 1.0), jnp.maximum(self.k, 1.0)
+        return jnp.log10(1 + L * q) / jnp.log10(1 + self.L_max * k)
+
+
+@register("exponential")
+class Exponential(AbstractLuminanceCurve):
+    """``1 − exp(−q L / (k L_a))``, ``L_a`` the log-average (colour-hdri ``..._exponential``)."""
+
+    q: Array = eqx.field(default=1.0, converter=param)
+    k: Array = eqx.field(default=1.0, converter=param)
+    log_average: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _measure(self, p: Prepared) -> "Exponential":
+        if self.log_average is not None:
+            return self
+        return _set(self, log_average=log_average(p, EPSILON))
+
+    def _curve(self, L: Array) -> Array:
+        q, k = jnp.maximum(self.q, 1.0), jnp.maximum(self.k, 1.0)
+        # beyond x = 200 the curve is 1 to double precision; the cap keeps gradients finite
+        L = jnp.minimum(L, 200.0 * self.log_average * k / q)
+        return 1 - jnp.exp(-(L * q) / (self.log_average * k))
+
+
+@register("logarithmic_mapping")
+class LogarithmicMapping(_MaxNormalised):
+    """``(ln(1 + p L) / ln(1 + p L_max))^(1/q)`` (colour-hdri ``..._logarithmic_mapping``)."""
+
+    p: Array = eqx.field(default=1.0, converter=param)
+    q: Array = eqx.field(default=1.0, converter=param)
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _curve(self, L: Array) -> Array:
+        r = jnp.log1p(self.p * L) / jnp.log1p(self.p * self.L_max)
+        pos = r > 0
+        return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, r, 1.0)) / self.q), 0.0)
+
+
+@register("exponentiation_mapping")
+class ExponentiationMapping(_MaxNormalised):
+    """``(L / L_max)^(p/q)`` (colour-hdri ``..._exponentiation_mapping``)."""
+
+    p: Array = eqx.field(default=1.0, converter=param)
+    q: Array = eqx.field(default=1.0, converter=param)
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _curve(self, L: Array) -> Array:
+        r = L / self.L_max
+        pos = r > 0
+        return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, r, 1.0)) * self.p / self.q), 0.0)
+
+
+@register("schlick1994")
+class Schlick1994(_MaxNormalised):
+    """``p L / (p L − L + L_max)`` (Schlick 1994; colour-hdri ``..._Schlick1994``)."""
+
+    p: Array = eqx.field(default=1.0, converter=param)
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _curve(self, L: Array) -> Array:
+        return (self.p * L) / (self.p * L - L + self.L_max)
+
+
+@register("reinhard2004")
+class Reinhard2004(AbstractOperator):
+    """Reinhard & Devlin 2005 photoreceptor operator, per channel, as colour-hdri computes it.
+
+    ``RGB / (RGB + (e^−f I_a)^m)`` with ``I_a = a I_l + (1 − a) I_g``,
+    ``I_l = (c RGB + (1 − c)) L``, ``I_g = c C_av + (1 − c) L_lav``; ``m ≤ 0`` selects the
+    automatic contrast ``0.3 + 0.7 ((ln L_max − L_lav) / (ln L_max − ln L_min))^1.4``. Both
+    the ``I_l`` expression and the automatic ``m`` (which subtracts the linear log-average
+    from a logarithm) reproduce colour-hdri exactly, including where they differ from the
+    paper, so results match for users switching tools.
+
+    Attributes:
+        f: intensity (brightness) −8 … 8 (0). m: contrast 0.3 … 1 (0.3; ≤ 0 → automatic).
+        a: light adaptation 0 … 1 (0). c: chromatic adaptation 0 … 1 (0).
+        channel_average, log_average, L_min, L_max: statistics; ``None`` → measured.
+    """
+
+    f: Array = eqx.field(default=0.0, converter=param)
+    m: Array = eqx.field(default=0.3, converter=param)
+    a: Array = eqx.field(default=0.0, converter=param)
+    c: Array = eqx.field(default=0.0, converter=param)
+    channel_average: Array | None = eqx.field(default=None, converter=param)
+    log_average: Array | None = eqx.field(default=None, converter=param)
+    L_min: Array | None = eqx.field(default=None, converter=param)
+    L_max: Array | None = eqx.field(default=None, converter=param)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _measure(self, p: Prepared) -> "Reinhard2004":
+        missing = {}
+        if self.channel_average is None:
+            finite = ~jnp.isnan(p.L_stats)
+            n = jnp.maximum(jnp.sum(finite), 1)
+            missing["channel_average"] = jnp.sum(p.rgb, axis=(0, 1)) / n
+        if self.log_average is None:
+            missing["log_average"] = log_average(p, EPSILON)
+        if self.L_min is None:
+            missing["L_min"] = min_luminance(p)
+        if self.L_max is None:
+            missing["L_max"] = max_luminance(p)
+        return _set(self, **missing) if missing else self
+
+    def _apply(self, p: Prepared) -> Array:
+        rgb = jnp.maximum(p.rgb, 0.0)
+        L = jnp.maximum(p.L, 0.0)[..., None]
+        f = jnp.exp(-self.f)
+        ln_max = jnp.log(self.L_max)
+        ln_min = jnp.log(jnp.maximum(self.L_min, jnp.finfo(L.dtype).tiny))
+        ratio = (ln_max - self.log_average) / jnp.where(ln_max > ln_min, ln_max - ln_min, 1.0)
+        auto = 0.3 + 0.7 * jnp.power(jnp.maximum(ratio, 0.0), 1.4)
+        m = jnp.where(self.m > 0, self.m, auto)
+        I_l = (self.c * rgb + (1 - self.c)) * L
+        C_av = self.channel_average.reshape((1,) * (rgb.ndim - 1) + (3,))
+        I_g = self.c * C_av + (1 - self.c) * self.log_average
+        I_a = self.a * I_l + (1 - self.a) * I_g
+        base = f * I_a
+        pos = base > 0
+        sigma = jnp.where(pos, jnp.exp(m * jnp.log(jnp.where(pos, base, 1.0))), 0.0)
+        den = rgb + sigma
+        return jnp.where(den > 0, rgb / jnp.where(den > 0, den, 1.0), 0.0)
+
+
+def hable(x: Array, A, B, C, D, E, F) -> Array:
+    """Hable's filmic curve ``((x(Ax + CB) + DE) / (x(Ax + B) + DF)) − E/F``.
+
+    For x > 1 numerator and denominator are divided by x² so huge inputs do not overflow.
+    """
+    x = jnp.asarray(x)
+    big = x > 1
+    inv = 1.0 / jnp.where(big, x, 1.0)
+    r_big = (A + C * B * inv + D * E * inv * inv) / (A + B * inv + D * F * inv * inv)
+    xs = jnp.where(big, 0.0, x)
+    r_small = (xs * (A * xs + C * B) + D * E) / (xs * (A * xs + B) + D * F)
+    return jnp.where(big, r_big, r_small) - E / F
+
+
+@register("filmic")
+class Filmic(AbstractOperator):
+    """Hable 2010 filmic curve per channel, normalised by its value at ``linear_whitepoint``
+    (colour-hdri ``tonemapping_operator_filmic``; same parameter names and defaults)."""
+
+    shoulder_strength: Array = eqx.field(default=0.22, converter=param)
+    linear_strength: Array = eqx.field(default=0.3, converter=param)
+    linear_angle: Array = eqx.field(default=0.1, converter=param)
+    toe_strength: Array = eqx.field(default=0.2, converter=param)
+    toe_numerator: Array = eqx.field(default=0.01, converter=param)
+    toe_denominator: Array = eqx.field(default=0.3, converter=param)
+    exposure_bias: Array = eqx.field(default=2.0, converter=param)
+    linear_whitepoint: Array = eqx.field(default=11.2, converter=param)
+
+    def _measure(self, p: Prepared) -> "Filmic":
+        return self
+
+    def _apply(self, p: Prepared) -> Array:
+        k = (self.shoulder_strength, self.linear_strength, self.linear_angle,
+             self.toe_strength, self.toe_numerator, self.toe_denominator)
+        out = hable(jnp.maximum(p.rgb, 0.0) * self.exposure_bias, *k)
+        return out / hable(self.linear_whitepoint, *k)
+
+
+__all__ = [
+    "ExponentiationMapping",
+    "Exponential",
+    "Filmic",
+    "Gamma",
+    "LogarithmicMapping",
+    "Logarithmic",
+    "Normalisation",
+    "Reinhard2004",
+    "Schlick1994",
+    "Simple",
+]

@@ -1,0 +1,121 @@
+"""Reinhard et al. 2002 photographic tone reproduction, with JGT 2002 automatic parameters.
+
+References:
+    Reinhard, Stark, Shirley, Ferwerda. "Photographic tone reproduction for digital images."
+    ACM TOG 21(3), 2002. https://doi.org/10.1145/566654.566575
+    Reinhard. "Parameter estimation for photographic tone reproduction." Journal of Graphics
+    Tools 7(1), 2002. https://doi.org/10.1080/10867651.2002.10487554
+
+Global operator (paper Eqs. 1–4; seed 003):
+    ``L̄_w = exp(mean(ln(δ + L_w)))``, ``L = a L_w / L̄_w``,
+    ``L_d = L (1 + L / L_white²) / (1 + L)``, colour scaled by ``L_d / L_w``.
+
+Automatic parameters (JGT; formulas.md §1.3), on the finite positive luminance:
+    key (Eq. 4): ``a = 0.18 · 4^((2 log2 L̄ − log2 L_1 − log2 L_99) / (log2 L_99 − log2 L_1))``
+    with ``L_1``/``L_99`` the 1st/99th percentiles and ``L̄`` the log-average of the pixels
+    at or below ``L_99`` (0.18 when ``L_99 = L_1``);
+    white (Eq. 5): ``L_white = 1.5 · 2^(log2 L_max − log2 L_min − 5)`` on the full range,
+    except when ``log2(L_max / L_min) ≤ log2 L̄ + 4.415037`` (Eq. 5's white would fall below
+    the log-average), where ``L_white = 1.5 · max(L)`` in scaled units (hdritools' guard).
+    ``L_white`` is in scaled units, like the paper's.
+"""
+
+from typing import Literal
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from ._base import (
+    AbstractOperator,
+    Prepared,
+    param,
+    register,
+    scale_by_luminance,
+    stats_of,
+    weights_field,
+)
+
+KEY_DEFAULT = 0.18
+
+
+def jgt_key(st: LuminanceStats) -> Array:
+    """JGT 2002 Eq. 4 automatic key from P1, P99 and the trimmed log-average."""
+    l1, l99 = jnp.log2(st.p01), jnp.log2(st.p99)
+    lbar = jnp.log2(st.log_average_trimmed)
+    span = l99 - l1
+    ok = span > 0
+    expo = (2 * lbar - l1 - l99) / jnp.where(ok, span, 1.0)
+    return jnp.where(ok, KEY_DEFAULT * jnp.power(4.0, expo), KEY_DEFAULT)
+
+
+def jgt_white(st: LuminanceStats, scale: Array) -> Array:
+    """JGT 2002 Eq. 5 white point (scaled units) from the full range, with hdritools' guard.
+
+    ``scale`` is ``a / L̄_w``, the factor from world to scaled luminance.
+    """
+    any_pos = st.n_positive > 0
+    L_max = jnp.where(any_pos & (st.max > 0), st.max, 1.0)  # safe for log and its gradient
+    zones = jnp.log2(L_max / st.min_positive)
+    eq5 = 1.5 * jnp.exp2(jnp.minimum(zones - 5.0, 100.0))  # 2^100: finite in float32
+    guard = zones <= jnp.log2(st.log_average_trimmed) + 4.415037
+    white = jnp.where(guard, 1.5 * L_max * scale, eq5)
+    return jnp.where(any_pos, jnp.maximum(white, jnp.finfo(white.dtype).tiny), 1.0)
+
+
+def reinhard_curve(L: Array, L_white: Array) -> Array:
+    """``L (1 + L / L_white²) / (1 + L)`` written to stay finite for L up to the float max."""
+    return (L / (1.0 + L)) * (1.0 + (L / L_white) / L_white)
+
+
+@register("reinhard2002")
+class Reinhard2002(AbstractOperator):
+    """Reinhard et al. 2002 global photographic operator (see module docstring).
+
+    Input: linear RGB, relative or absolute (the operator is scale invariant when ``key``,
+    ``L_white`` and ``log_average`` are measured). Output: display-referred linear RGB,
+    ``L_d ∈ [0, 1]`` for ``L_w ≤ L_white``.
+
+    Attributes:
+        key: the key ``a``; ``None`` → JGT Eq. 4 estimate (0.18 is the paper's default).
+        L_white: smallest scaled luminance mapped to white; ``None`` → JGT Eq. 5.
+            ``jnp.inf`` gives the simple operator ``L / (1 + L)``.
+        log_average: ``L̄_w`` in image units; ``None`` → measured with ``delta``.
+        delta: offset inside the log-average (1e-6, HDR Toolbox; the seed uses 1e-5).
+        percentile_method: ``"histogram"`` (fast, bounded error) or ``"exact"`` (sort).
+        bins: histogram bins for the percentiles.
+        weights: luminance weights of the image's primaries (Rec.709 default).
+    """
+
+    key: Array | None = eqx.field(default=None, converter=param)
+    L_white: Array | None = eqx.field(default=None, converter=param)
+    log_average: Array | None = eqx.field(default=None, converter=param)
+    delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
+    percentile_method: Literal["histogram", "exact"] = eqx.field(
+        static=True, default="histogram"
+    )
+    bins: int = eqx.field(static=True, default=DEFAULT_BINS)
+    weights: tuple[float, float, float] = weights_field()
+
+    def _measure(self, p: Prepared) -> "Reinhard2002":
+        if not self.unset():
+            return self
+        st = stats_of(p, method=self.percentile_method, bins=self.bins)
+        lbar = st.log_average if self.log_average is None else self.log_average
+        key = jgt_key(st) if self.key is None else self.key
+        white = self.L_white
+        if white is None:
+            white = jgt_white(st, key / lbar)
+        return Reinhard2002(key, white, lbar, self.delta, self.percentile_method, self.bins,
+                            self.weights)
+
+    def _apply(self, p: Prepared) -> Array:
+        assert self.key is not None and self.L_white is not None
+        assert self.log_average is not None
+        scale = self.key / self.log_average
+        return scale_by_luminance(p.rgb, p.L, lambda L: reinhard_curve(scale * L, self.L_white))
+
+
+__all__ = ["KEY_DEFAULT", "Reinhard2002", "jgt_key", "jgt_white", "reinhard_curve"]
