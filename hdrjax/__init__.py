@@ -5,7 +5,15 @@ absolute (cd/m²); operators return display-referred linear RGB, nominally [0, 1
 :func:`hdrjax.display.encode` turns into sRGB. float32 by default, float64 with x64 enabled.
 """
 
-from . import _stats as stats, display as display, operators as operators
+from . import (
+    _stats as stats,
+    display as display,
+    io as io,
+    layers as layers,
+    measure as measure,
+    operators as operators,
+    panorama as panorama,
+)
 from ._colour import (
     REC709_CHROMATICITIES as REC709_CHROMATICITIES,
     REC709_WEIGHTS as REC709_WEIGHTS,

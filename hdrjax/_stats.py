@@ -89,7 +89,8 @@ class LuminanceStats(eqx.Module):
     @property
     def dynamic_range_stops(self) -> Array:
         """``log2(max / min_positive)``: the full dynamic range in stops (0 if no light)."""
-        return jnp.where(self.n_positive > 0, jnp.log2(self.max / self.min_positive), 0.0)
+        mx = jnp.where(self.n_positive > 0, self.max, 1.0)
+        return jnp.where(self.n_positive > 0, jnp.log2(mx) - jnp.log2(self.min_positive), 0.0)
 
 
 def _log_histogram(

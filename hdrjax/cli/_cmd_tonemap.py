@@ -93,15 +93,23 @@ def build_operator(args: argparse.Namespace):
         raise UsageError(str(e)) from None
 
 
-def describe(op) -> str:
-    """One line per parameter, for the user."""
+def describe(op, estimated: tuple[str, ...] = (), given: dict | None = None) -> str:
+    """One line per parameter, for the user; ``estimated`` ones are marked. ``given``:
+    the user's parameters, shown too when the measured operator replaced them (exposure)."""
     lines = [f"operator: {op.name}"]
-    for name, value in op.parameters().items():
+    params = op.parameters()
+    for name, value in (given or {}).items():
+        if value is not None and params.get(name) is None:
+            params[name] = value
+    for name, value in params.items():
+        if value is None:
+            continue
         if name == "weights":
             value = "(" + ", ".join(f"{w:.4f}" for w in value) + ")"
         elif isinstance(value, float):
             value = f"{value:.6g}"
-        lines.append(f"  {name}: {value}")
+        mark = "  (estimated from the image)" if name in estimated else ""
+        lines.append(f"  {name}: {value}{mark}")
     return "\n".join(lines)
 
 
@@ -169,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"input: {args.input} ({w}x{h})")
     if n_bad:
         print(f"  {n_bad} pixel(s) with NaN/Inf values excluded from statistics")
-    print(describe(measured))
+    print(describe(measured, op.unset(), op.parameters()))
     print(f"wrote: {args.output}")
     if args.verbose:
         print(f"time: read {t_read:.3f}s, tone map {t_map:.3f}s (incl. compile),"

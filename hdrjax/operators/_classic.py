@@ -173,7 +173,7 @@ class Reinhard2004(AbstractOperator):
 
     ``RGB / (RGB + (e^−f I_a)^m)`` with ``I_a = a I_l + (1 − a) I_g``,
     ``I_l = (c RGB + (1 − c)) L``, ``I_g = c C_av + (1 − c) L_lav``; ``m ≤ 0`` selects the
-    automatic contrast ``0.3 + 0.7 ((ln L_max − L_lav) / (ln L_max − ln L_min))^1.4``. Both
+    automatic contrast ``0.3 + 0.7 (ln L_max − L_lav) / (ln L_max − ln L_min)^1.4``. Both
     the ``I_l`` expression and the automatic ``m`` (which subtracts the linear log-average
     from a logarithm) reproduce colour-hdri exactly, including where they differ from the
     paper, so results match for users switching tools.
@@ -214,8 +214,10 @@ class Reinhard2004(AbstractOperator):
         f = jnp.exp(-self.f)
         ln_max = jnp.log(self.L_max)
         ln_min = jnp.log(jnp.maximum(self.L_min, jnp.finfo(L.dtype).tiny))
-        ratio = (ln_max - self.log_average) / jnp.where(ln_max > ln_min, ln_max - ln_min, 1.0)
-        auto = 0.3 + 0.7 * jnp.power(jnp.maximum(ratio, 0.0), 1.4)
+        # colour-hdri evaluates ``(ln L_max − L_lav) / (ln L_max − ln L_min) ** 1.4``: the
+        # power binds to the denominator only (Python precedence); reproduced as is.
+        span = jnp.where(ln_max > ln_min, ln_max - ln_min, 1.0)
+        auto = 0.3 + 0.7 * (ln_max - self.log_average) / jnp.power(span, 1.4)
         m = jnp.where(self.m > 0, self.m, auto)
         I_l = (self.c * rgb + (1 - self.c)) * L
         C_av = self.channel_average.reshape((1,) * (rgb.ndim - 1) + (3,))

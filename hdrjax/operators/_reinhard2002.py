@@ -58,7 +58,7 @@ def jgt_white(st: LuminanceStats, scale: Array) -> Array:
     """
     any_pos = st.n_positive > 0
     L_max = jnp.where(any_pos & (st.max > 0), st.max, 1.0)  # safe for log and its gradient
-    zones = jnp.log2(L_max / st.min_positive)
+    zones = jnp.log2(L_max) - jnp.log2(st.min_positive)  # no overflow of the ratio
     eq5 = 1.5 * jnp.exp2(jnp.minimum(zones - 5.0, 100.0))  # 2^100: finite in float32
     guard = zones <= jnp.log2(st.log_average_trimmed) + 4.415037
     white = jnp.where(guard, 1.5 * L_max * scale, eq5)

@@ -174,7 +174,7 @@ class Reinhard2002Auto(AbstractOperator):
 
     def use_local(self, p: Prepared) -> Array:
         st = stats_of(p, method=self.percentile_method, bins=self.bins)
-        return (st.n_positive > 0) & (jnp.log2(st.max / st.min_positive) > self.zones)
+        return (st.n_positive > 0) & (st.dynamic_range_stops > self.zones)
 
     def _apply(self, p: Prepared) -> Array:
         common = dict(key=self.key, log_average=self.log_average, delta=self.delta,

@@ -1,0 +1,19 @@
+"""Reading and writing HDR files (OpenEXR, Radiance RGBE, PFM) and display exports.
+
+NumPy side, never jitted. :func:`read` returns a :class:`~hdrjax.layers.LayeredImage`;
+:func:`write` stores one (or a plain array); :func:`write_display` exports tone-mapped,
+display-encoded images to PNG (8/16 bit), JPEG and TIFF. All writes are atomic. Problems
+with a file's content raise :class:`ReadError` (a ``ValueError``) whose one-line message
+names the file.
+"""
+
+from ..layers._errors import LayerShapeError as LayerShapeError
+from ..layers._errors import MissingLayerError as MissingLayerError
+from ..layers._errors import ReadError as ReadError
+from ._api import READ_FORMATS as READ_FORMATS
+from ._api import find_sidecars as find_sidecars
+from ._api import read as read
+from ._api import write as write
+from ._atomic import atomic_path as atomic_path
+from ._display import DISPLAY_FORMATS as DISPLAY_FORMATS
+from ._display import write_display as write_display

@@ -1,0 +1,207 @@
+"""Export of display-referred (already tone-mapped and encoded) images: PNG, JPEG, TIFF.
+
+Input is display-referred: float in [0, 1] (values outside are clipped, NaN becomes 0) or
+integer code values (uint8 / uint16). Nothing here applies a transfer function; encode
+with the display module first. Each file carries an sRGB note: the PNG ``sRGB`` chunk
+(rendering intent perceptual) and, for JPEG and TIFF, an embedded sRGB ICC profile (when
+Pillow has LittleCMS; TIFF otherwise has no profile). PNG and TIFF are written by hdrjax
+itself (zlib + struct), so 16-bit RGB works; JPEG uses Pillow (8 bit only).
+"""
+
+import io as _io
+import os
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from ._atomic import atomic_path
+
+DISPLAY_FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tif": "tiff", ".tiff": "tiff"}
+
+
+def _srgb_icc() -> bytes | None:
+    try:
+        from PIL import ImageCms
+
+        return ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    except Exception:  # Pillow without LittleCMS: no profile, the file is still valid
+        return None
+
+
+def to_code_values(display: np.ndarray, bits: int) -> np.ndarray:
+    """``(H, W, C)`` code values (uint8 for 8 bits, uint16 for 16) from display input."""
+    if bits not in (8, 16):
+        raise ValueError(f"bits must be 8 or 16, got {bits}")
+    a = np.asarray(display)
+    if a.ndim == 2:
+        a = a[:, :, None]
+    if a.ndim != 3 or a.shape[2] not in (1, 3, 4) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(f"display image: expected (H, W), (H, W, 3) or (H, W, 4), got {a.shape}")
+    top = (1 << bits) - 1
+    if a.dtype == np.uint8:
+        return a if bits == 8 else a.astype(np.uint16) * np.uint16(257)
+    if a.dtype == np.uint16:
+        if bits == 16:
+            return a
+        return ((a.astype(np.uint32) + 128) // 257).astype(np.uint8)
+    if np.issubdtype(a.dtype, np.integer) or a.dtype == np.bool_:
+        raise ValueError(f"display image: integer input must be uint8 or uint16, got {a.dtype}")
+    f = np.nan_to_num(a.astype(np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+    f = np.clip(f, 0.0, 1.0) * np.float32(top) + np.float32(0.5)
+    return f.astype(np.uint8 if bits == 8 else np.uint16)
+
+
+def _chunk(kind: bytes, data: bytes) -> bytes:
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def encode_png(code: np.ndarray) -> bytes:
+    """PNG bytes for ``(H, W, C)`` uint8/uint16 code values, with an ``sRGB`` chunk."""
+    h, w, c = code.shape
+    depth = 16 if code.dtype == np.uint16 else 8
+    ctype = {1: 0, 3: 2, 4: 6}[c]
+    rows = np.ascontiguousarray(code, dtype=">u2" if depth == 16 else np.uint8).reshape(h, -1)
+    raw = np.empty((h, rows.view(np.uint8).shape[1] + 1), np.uint8)
+    raw[:, 0] = 0  # filter type None
+    raw[:, 1:] = rows.view(np.uint8)
+    out = [
+        b"\x89PNG\r\n\x1a\n",
+        _chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, ctype, 0, 0, 0)),
+        _chunk(b"sRGB", b"\x00"),
+        _chunk(b"gAMA", struct.pack(">I", 45455)),
+        _chunk(b"tEXt", b"Software\x00hdrjax"),
+        _chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)),
+        _chunk(b"IEND", b""),
+    ]
+    return b"".join(out)
+
+
+def encode_tiff(code: np.ndarray, icc: bytes | None = None) -> bytes:
+    """Baseline little-endian TIFF (one deflate strip) for uint8/uint16 ``(H, W, C)``."""
+    h, w, c = code.shape
+    bits = 16 if code.dtype == np.uint16 else 8
+    data = zlib.compress(
+        np.ascontiguousarray(code, dtype="<u2" if bits == 16 else np.uint8).tobytes(), 6
+    )
+    photometric = 1 if c == 1 else 2
+    extra = b""
+    base = 8  # IFD right after the header; values that do not fit come after the IFD
+
+    def short_list(vals: list[int]) -> bytes:
+        return struct.pack(f"<{len(vals)}H", *vals)
+
+    entries = [
+        (256, 4, 1, w),
+        (257, 4, 1, h),
+        (258, 3, c, short_list([bits] * c)),
+        (259, 3, 1, 8),  # Adobe deflate
+        (262, 3, 1, photometric),
+        (273, 4, 1, None),  # strip offset, filled below
+        (277, 3, 1, c),
+        (278, 4, 1, h),
+        (279, 4, 1, len(data)),
+        (284, 3, 1, 1),
+        (305, 2, 7, b"hdrjax\x00"),
+    ]
+    if c == 4:
+        entries.append((338, 3, 1, 2))  # unassociated alpha
+    if icc:
+        entries.append((34675, 7, len(icc), icc))
+    entries.sort(key=lambda e: e[0])
+    ifd_size = 2 + 12 * len(entries) + 4
+    off = base + ifd_size
+    resolved = []
+    for tag, typ, count, value in entries:
+        if isinstance(value, bytes) and len(value) > 4:
+            resolved.append((tag, typ, count, struct.pack("<I", off + len(extra))))
+            extra += value + (b"\x00" if len(value) % 2 else b"")
+        else:
+            resolved.append((tag, typ, count, value))
+    strip_off = off + len(extra)
+    ifd = struct.pack("<H", len(resolved))
+    for tag, typ, count, value in resolved:
+        if value is None:
+            value = strip_off
+        if isinstance(value, int):
+            raw = struct.pack("<H", value) + b"\x00\x00" if typ == 3 else struct.pack("<I", value)
+        else:
+            raw = value.ljust(4, b"\x00")
+        ifd += struct.pack("<HHI", tag, typ, count) + raw
+    ifd += struct.pack("<I", 0)
+    return b"II*\x00" + struct.pack("<I", base) + ifd + extra + data
+
+
+def encode_jpeg(code: np.ndarray, *, quality: int = 95, icc: bytes | None = None) -> bytes:
+    """JPEG bytes (Pillow) for uint8 ``(H, W, 1 or 3)`` code values."""
+    from PIL import Image
+
+    if code.dtype != np.uint8:
+        raise ValueError("JPEG holds 8 bits per channel; use PNG or TIFF for bits=16")
+    c = code.shape[2]
+    if c == 4:
+        raise ValueError("JPEG has no alpha channel; pass an (H, W, 3) image")
+    im = Image.fromarray(code[:, :, 0] if c == 1 else code, mode="L" if c == 1 else "RGB")
+    buf = _io.BytesIO()
+    # full-resolution chroma at high quality: tone-mapped renders have sharp colour edges
+    kw = {"quality": int(quality), "subsampling": 0 if quality >= 90 else 2}
+    if icc:
+        kw["icc_profile"] = icc
+    im.save(buf, format="JPEG", **kw)
+    return buf.getvalue()
+
+
+def write_display(
+    path: str | os.PathLike,
+    display_rgb: np.ndarray,
+    *,
+    bits: int = 8,
+    overwrite: bool = True,
+    quality: int = 95,
+) -> Path:
+    """Write a display-referred image to PNG (8/16 bit), JPEG (8 bit) or TIFF (8/16 bit).
+
+    Args:
+        path: output file; the format comes from the extension (``.png``, ``.jpg``,
+            ``.jpeg``, ``.tif``, ``.tiff``).
+        display_rgb: ``(H, W, 3)`` (or ``(H, W)`` grey, ``(H, W, 4)`` with alpha for
+            PNG/TIFF): float in [0, 1], already encoded (e.g. sRGB) and clipped; or uint8 /
+            uint16 code values.
+        bits: 8 or 16 bits per channel (JPEG: 8 only).
+        overwrite: when ``False``, refuse to replace an existing file
+            (``FileExistsError``).
+        quality: JPEG quality, 1-100.
+
+    Returns:
+        The path written. The file is written to a temporary name in the same folder and
+        renamed into place.
+
+    Raises:
+        ValueError: unknown extension, bad shape or dtype, 16-bit JPEG.
+        FileExistsError: ``path`` exists and ``overwrite`` is ``False``.
+    """
+    path = Path(path)
+    fmt = DISPLAY_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise ValueError(
+            f"{path.name}: unknown display format {path.suffix!r}; expected .png, .jpg, .jpeg, "
+            ".tif or .tiff"
+        )
+    if fmt == "jpeg" and bits != 8:
+        raise ValueError(f"{path.name}: JPEG holds 8 bits per channel; use PNG or TIFF for bits=16")
+    if not 1 <= int(quality) <= 100:
+        raise ValueError(f"quality must be in 1..100, got {quality}")
+    code = to_code_values(display_rgb, bits)
+    if fmt == "png":
+        data = encode_png(code)
+    elif fmt == "tiff":
+        data = encode_tiff(code, _srgb_icc())
+    else:
+        data = encode_jpeg(code, quality=quality, icc=_srgb_icc())
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        tmp.write_bytes(data)
+    return path
+
+
+__all__ = ["DISPLAY_FORMATS", "encode_png", "encode_tiff", "to_code_values", "write_display"]

@@ -1,0 +1,95 @@
+"""Statistics (histogram percentiles with their bound, exact mode, exclusion of bad pixels),
+luminance weights from primaries, and display encoding."""
+
+import colour
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import hdrjax
+from hdrjax._stats import measure, percentile
+from hdrjax.display import encode, gamma_encode, quantize, srgb_decode, srgb_encode
+
+
+@pytest.mark.parametrize("sigma", [0.5, 3.0, 6.0])
+def test_histogram_percentiles_within_stated_bound(sigma):
+    rng = np.random.default_rng(1)
+    L = rng.lognormal(0, sigma, 200_000).astype(np.float32)
+    q = np.array([1.0, 5.0, 50.0, 90.0, 99.0])
+    vals, bound = percentile(L, q)
+    ref = np.percentile(L.astype(np.float64), q)
+    err = np.abs(np.asarray(vals) / ref - 1)
+    assert float(bound) > 0 and np.all(err <= float(bound) + 1e-6), (err, float(bound))
+    exact, zero = percentile(L, q, method="exact")
+    np.testing.assert_allclose(exact, ref, rtol=1e-5)
+    assert float(zero) == 0.0
+    more, tighter = percentile(L, q, bins=65536)
+    assert float(tighter) < float(bound) / 4
+
+
+def test_percentiles_skip_bad_and_non_positive_values():
+    L = np.array([np.nan, np.inf, -np.inf, -3.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0], np.float32)
+    vals, _ = percentile(L, np.array([0.0, 50.0, 100.0]), method="exact")
+    np.testing.assert_allclose(vals, [1.0, 3.0, 5.0])
+    vals, b = percentile(L, np.array([0.0, 50.0, 100.0]))
+    np.testing.assert_allclose(vals, [1.0, 3.0, 5.0], rtol=float(b))
+    empty, _ = percentile(np.zeros(5, np.float32), np.array([50.0]))
+    assert np.isnan(np.asarray(empty)).all()
+
+
+def test_measure_against_numpy(x64):
+    rng = np.random.default_rng(2)
+    L = rng.lognormal(0, 2, (64, 64))
+    L[0, 0], L[0, 1], L[1, 1] = np.nan, np.inf, -0.5
+    st = jax.jit(lambda x: measure(x, method="exact"))(L)
+    ok = np.isfinite(L)
+    f = L[ok]
+    pos = f[f > 0]
+    assert int(st.n_nonfinite) == 2 and int(st.n_positive) == pos.size
+    np.testing.assert_allclose(float(st.log_average),
+                               np.exp(np.mean(np.log(1e-6 + np.maximum(f, 0)))), rtol=1e-9)
+    np.testing.assert_allclose(float(st.max), f.max())
+    np.testing.assert_allclose(float(st.min), -0.5)
+    np.testing.assert_allclose(float(st.min_positive), pos.min())
+    p1, p99 = np.percentile(pos, [1, 99])
+    np.testing.assert_allclose([float(st.p01), float(st.p99)], [p1, p99], rtol=1e-9)
+    np.testing.assert_allclose(float(st.log_average_trimmed),
+                               np.exp(np.mean(np.log(pos[pos <= p99]))), rtol=1e-9)
+    np.testing.assert_allclose(float(st.dynamic_range_stops), np.log2(f.max() / pos.min()))
+
+
+def test_luminance_weights_from_primaries():
+    # ACES AP0 (Carrots.exr): Y weights with a negative blue (SOURCES.md)
+    ap0 = (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767)
+    np.testing.assert_allclose(hdrjax.luminance_weights(ap0),
+                               [0.34397, 0.72817, -0.07213], atol=5e-6)
+    assert hdrjax.luminance_weights(None) == (0.2126, 0.7152, 0.0722)
+    with pytest.raises(ValueError, match="chromaticities"):
+        hdrjax.luminance_weights((0.1, 0.2))
+    with pytest.raises(ValueError, match="degenerate"):
+        hdrjax.luminance_weights((0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3127, 0.329))
+    rgb = np.random.default_rng(0).uniform(0, 1, (4, 5, 3))
+    np.testing.assert_allclose(hdrjax.luminance(rgb, ap0 and hdrjax.luminance_weights(ap0)),
+                               rgb @ np.array(hdrjax.luminance_weights(ap0)), rtol=1e-5)
+
+
+def test_srgb_matches_colour_science(x64):
+    x = np.linspace(0, 1, 1001)
+    np.testing.assert_allclose(srgb_encode(x), colour.cctf_encoding(x, "sRGB"), atol=1e-12)
+    np.testing.assert_allclose(srgb_decode(srgb_encode(x)), x, atol=1e-12)
+    np.testing.assert_allclose(gamma_encode(x, 2.2), x ** (1 / 2.2), atol=1e-12)
+
+
+def test_encoding_clips_and_quantizes():
+    x = jnp.array([-1.0, 0.0, 0.5, 1.0, 7.0, jnp.nan, jnp.inf])
+    enc = np.asarray(encode(x, "linear"))
+    np.testing.assert_array_equal(enc, [0, 0, 0.5, 1, 1, 0, 1])
+    np.testing.assert_array_equal(quantize(enc, 8), [0, 0, 128, 255, 255, 0, 255])
+    assert quantize(enc, 16).dtype == np.uint16 and quantize(enc, 16)[3] == 65535
+    with pytest.raises(ValueError, match="bits"):
+        quantize(enc, 12)
+    with pytest.raises(ValueError, match="transfer"):
+        encode(x, "pq")
+    g = jax.grad(lambda v: jnp.sum(srgb_encode(v)))(jnp.array([0.0, 0.001, 0.5, 2.0]))
+    assert np.all(np.isfinite(np.asarray(g)))
