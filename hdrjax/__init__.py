@@ -8,11 +8,13 @@ absolute (cd/m²); operators return display-referred linear RGB, nominally [0, 1
 from . import (
     _stats as stats,
     display as display,
+    fit as fit,
     io as io,
     layers as layers,
     measure as measure,
     operators as operators,
     panorama as panorama,
+    targets as targets,
 )
 from ._colour import (
     REC709_CHROMATICITIES as REC709_CHROMATICITIES,

@@ -50,10 +50,8 @@ def accurate_sum(x: Array, where: Array | None = None) -> Array:
         x = jnp.where(where.reshape(-1), x, 0)
     n = x.shape[0]
     block = 4096
-    if n <= 2 * block:
-        return jnp.sum(x)
-    pad = (-n) % block
-    x = jnp.pad(x, (0, pad))
+    if n <= 2 * block or n % block:
+        return jnp.sum(x)  # small, or ragged: one reduction (a pad would copy the image)
     return jnp.sum(jnp.sum(x.reshape(-1, block), axis=1))
 
 
@@ -91,18 +89,6 @@ class LuminanceStats(eqx.Module):
         """``log2(max / min_positive)``: the full dynamic range in stops (0 if no light)."""
         mx = jnp.where(self.n_positive > 0, self.max, 1.0)
         return jnp.where(self.n_positive > 0, jnp.log2(mx) - jnp.log2(self.min_positive), 0.0)
-
-
-def _log_histogram(
-    L: Array, valid: Array, lo: Array, hi: Array, bins: int
-) -> tuple[Array, Array]:
-    """Histogram of ``ln L`` over ``valid`` pixels on ``bins`` equal bins in [lo, hi]."""
-    width = jnp.maximum(hi - lo, 1e-20) / bins
-    lnL = jnp.log(jnp.where(valid, L, 1.0))
-    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
-    idx = jnp.where(valid, idx, bins)  # out-of-range index: dropped by the scatter
-    counts = jnp.zeros(bins, jnp.int32).at[idx.reshape(-1)].add(1, mode="drop")
-    return counts, width
 
 
 def _hist_quantiles(counts: Array, lo: Array, width: Array, qs: Array) -> Array:
@@ -154,13 +140,24 @@ def percentile(
         vals = jnp.nanquantile(jnp.where(valid, L, jnp.nan).reshape(-1), qs)
         return jnp.where(n > 0, vals, jnp.nan), jnp.zeros((), L.dtype)
     Ls = jax.lax.stop_gradient(L)
-    lo = jnp.log(jnp.min(jnp.where(valid, Ls, jnp.inf)))
-    hi = jnp.log(jnp.max(jnp.where(valid, Ls, 0.0)))
+    lnL = jnp.log(jnp.where(valid, Ls, 1.0))
+    lo = jnp.min(jnp.where(valid, lnL, jnp.inf))
+    hi = jnp.max(jnp.where(valid, lnL, -jnp.inf))
+    return _histogram_percentiles(lnL, valid, n, lo, hi, qs, int(bins))
+
+
+def _histogram_percentiles(
+    lnL: Array, valid: Array, n: Array, lo: Array, hi: Array, qs: Array, bins: int
+) -> tuple[Array, Array]:
+    """Percentiles from a histogram of ``lnL`` over ``valid`` on [lo, hi] (see module doc)."""
     lo = jnp.where(n > 0, lo, 0.0)
     hi = jnp.where(n > 0, hi, 0.0)
-    counts, width = _log_histogram(Ls, valid, lo, hi, int(bins))
-    vals = _hist_quantiles(counts, lo, width, qs)
-    vals = jnp.clip(vals, jnp.exp(lo), jnp.exp(hi))
+    width = jnp.maximum(hi - lo, 1e-20) / bins
+    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
+    # excluded pixels get an out-of-range index, dropped by the scatter (no select)
+    idx = idx + (1 - valid.astype(jnp.int32)) * bins
+    counts = jnp.zeros(bins, jnp.int32).at[idx.reshape(-1)].add(1, mode="drop")
+    vals = jnp.clip(_hist_quantiles(counts, lo, width, qs), jnp.exp(lo), jnp.exp(hi))
     return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, jnp.expm1(width), 0.0)
 
 
@@ -170,38 +167,64 @@ def measure(
     delta: float = DEFAULT_DELTA,
     method: Literal["histogram", "exact"] = "histogram",
     bins: int = DEFAULT_BINS,
+    assume_finite: bool = False,
 ) -> LuminanceStats:
-    """Measure the luminance statistics the automatic operators need, in one pass.
+    """Measure the luminance statistics the automatic operators need.
 
     ``L`` is one image's luminance (``vmap`` for batches). Gradients flow through the
     extrema and log-averages; histogram percentiles are constants (see module docstring).
+    ``assume_finite=True`` skips the NaN/Inf masking (the operators check this first).
+
+    Masks are applied by multiplying with 0/1 floats and extrema by pushing excluded pixels
+    to ±float max: on XLA:CPU a ``where`` inside a reduction is not vectorised and cost 4–6×
+    a plain sum (benchmarks/bench_reinhard.py).
     """
     L = _float(L)
-    finite = jnp.isfinite(L)
-    positive = finite & (L > 0)
+    dt = L.dtype
+    big = float(jnp.finfo(dt).max)
+    if assume_finite:
+        Lz, finf = L, None
+        n_finite = jnp.asarray(L.size, dt)
+    else:
+        finite = jnp.isfinite(L)
+        Lz = jnp.where(finite, L, 0.0)
+        finf = finite.astype(dt)
+        n_finite = accurate_sum(finf)
+    posf = (Lz > 0).astype(dt)
     n_pix = jnp.asarray(L.size, jnp.int32)
-    n_finite = jnp.sum(finite, dtype=jnp.int32)
-    n_pos = jnp.sum(positive, dtype=jnp.int32)
+    n_pos = accurate_sum(posf)
     any_finite = n_finite > 0
     any_pos = n_pos > 0
-    Lf = jnp.where(finite, L, 0.0)
-    lmin = jnp.where(any_finite, jnp.min(jnp.where(finite, L, jnp.inf)), 0.0)
-    lmax = jnp.where(any_finite, jnp.max(jnp.where(finite, L, -jnp.inf)), 0.0)
-    minpos = jnp.where(any_pos, jnp.min(jnp.where(positive, L, jnp.inf)), 1.0)
-    log_terms = jnp.log(delta + jnp.maximum(Lf, 0.0))
-    log_avg = jnp.exp(accurate_sum(log_terms, finite) / jnp.maximum(n_finite, 1))
-    (p01, p99), err = percentile(L, jnp.array([1.0, 99.0]), method=method, bins=bins)
+    if finf is None:
+        lmin, lmax = jnp.min(Lz), jnp.max(Lz)
+    else:
+        lmin = jnp.where(any_finite, jnp.min(Lz + (1 - finf) * big), 0.0)
+        lmax = jnp.where(any_finite, jnp.max(Lz - (1 - finf) * big), 0.0)
+    minpos = jnp.where(any_pos, jnp.min(Lz + (1 - posf) * big), 1.0)
+    log_terms = jnp.log(delta + jnp.maximum(Lz, 0.0))
+    if finf is not None:
+        log_terms = log_terms * finf
+    log_avg = jnp.exp(accurate_sum(log_terms) / jnp.maximum(n_finite, 1))
+    # one log for the histogram and the trimmed mean; non-positive pixels are masked out
+    lnL = jnp.log(jnp.maximum(Lz, jnp.finfo(dt).tiny))
+    qs = jnp.array([0.01, 0.99], dt)
+    if method == "exact":
+        (p01, p99), err = percentile(L, 100 * qs, method="exact")
+    else:
+        lnL_c = jax.lax.stop_gradient(lnL)
+        lo = jnp.log(jax.lax.stop_gradient(minpos))
+        hi = jnp.log(jax.lax.stop_gradient(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)))
+        (p01, p99), err = _histogram_percentiles(lnL_c, posf, n_pos, lo, hi, qs, int(bins))
     p01 = jnp.where(any_pos, p01, 1.0)
     p99 = jnp.where(any_pos, p99, 1.0)
-    kept = positive & (L <= p99)
-    n_kept = jnp.sum(kept, dtype=jnp.int32)
-    lnL = jnp.log(jnp.where(positive, L, 1.0))
-    trimmed = jnp.exp(accurate_sum(lnL, kept) / jnp.maximum(n_kept, 1))
+    keptf = posf * (Lz <= p99).astype(dt)
+    n_kept = accurate_sum(keptf)
+    trimmed = jnp.exp(accurate_sum(lnL * keptf) / jnp.maximum(n_kept, 1))
     trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
     return LuminanceStats(
         n_pixels=n_pix,
-        n_nonfinite=n_pix - n_finite,
-        n_positive=n_pos,
+        n_nonfinite=n_pix - jnp.round(n_finite).astype(jnp.int32),
+        n_positive=jnp.round(n_pos).astype(jnp.int32),
         min=lmin,
         min_positive=minpos,
         max=lmax,

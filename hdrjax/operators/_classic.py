@@ -23,6 +23,7 @@ from ._base import (
     AbstractLuminanceCurve,
     AbstractOperator,
     Prepared,
+    count_valid,
     log_average,
     max_luminance,
     min_luminance,
@@ -46,7 +47,7 @@ class _MaxNormalised(AbstractLuminanceCurve):
     """Operators whose only statistic is the largest luminance ``L_max``."""
 
     def _measure(self, p: Prepared):
-        if getattr(self, "L_max") is not None:
+        if self.L_max is not None:
             return self
         return _set(self, L_max=max_luminance(p))
 
@@ -197,9 +198,7 @@ class Reinhard2004(AbstractOperator):
     def _measure(self, p: Prepared) -> "Reinhard2004":
         missing = {}
         if self.channel_average is None:
-            finite = ~jnp.isnan(p.L_stats)
-            n = jnp.maximum(jnp.sum(finite), 1)
-            missing["channel_average"] = jnp.sum(p.rgb, axis=(0, 1)) / n
+            missing["channel_average"] = jnp.sum(p.rgb, axis=(0, 1)) / count_valid(p)
         if self.log_average is None:
             missing["log_average"] = log_average(p, EPSILON)
         if self.L_min is None:

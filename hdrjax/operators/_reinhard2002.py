@@ -23,7 +23,6 @@ Automatic parameters (JGT; formulas.md §1.3), on the finite positive luminance:
 from typing import Literal
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 

@@ -139,7 +139,7 @@ class Reinhard2002Local(AbstractOperator):
     def _apply(self, p: Prepared) -> Array:
         assert self.key is not None and self.log_average is not None
         scale = self.key / self.log_average
-        valid = ~jnp.isnan(p.L_stats)
+        valid = p.valid()
         V1m = local_adaptation(scale * jnp.maximum(p.L, 0.0), valid, self.key, phi=self.phi,
                                epsilon=self.epsilon, ss=scales(self.s_low, self.s_high,
                                                                self.num))

@@ -28,6 +28,8 @@ from jaxtyping import Array
 from ._base import (
     AbstractOperator,
     Prepared,
+    log_average,
+    max_luminance,
     param,
     register,
     safe_log,
@@ -65,13 +67,9 @@ def adaptation_luminance(p: Prepared, method: str, bins: int) -> Array:
     (colour-hdri, HDR Toolbox), or ``"trimmed"``: the log-average of the positive pixels
     between the 1st and 99th percentiles (robust to a few lamps or dark corners)."""
     if method == "log_average":
-        Lf = jnp.where(jnp.isnan(p.L_stats), jnp.nan, jnp.maximum(p.L, 0.0))
-        finite = ~jnp.isnan(Lf)
-        n = jnp.maximum(jnp.sum(finite), 1)
-        s = jnp.sum(jnp.where(finite, jnp.log(jnp.where(finite, Lf, 0.0) + STEVENS_EPS), 0.0))
-        return jnp.exp(s / n)
+        return log_average(p, STEVENS_EPS)
     st = stats_of(p, bins=bins)
-    keep = ~jnp.isnan(p.L_stats) & (p.L >= st.p01) & (p.L <= st.p99) & (p.L > 0)
+    keep = p.valid() & (p.L >= st.p01) & (p.L <= st.p99) & (p.L > 0)
     lnL = safe_log(p.L)
     n = jnp.maximum(jnp.sum(keep), 1)
     return jnp.where(jnp.any(keep), jnp.exp(jnp.sum(jnp.where(keep, lnL, 0.0)) / n), 1.0)
@@ -165,7 +163,7 @@ class TumblinReinhard(AbstractOperator):
             L_wa = adaptation_luminance(p, self.adaptation, self.bins)
         L_max = self.L_max
         if L_max is None:
-            L_max = jnp.maximum(jnp.max(jnp.where(jnp.isnan(p.L_stats), 0.0, p.L)), 1e-30)
+            L_max = max_luminance(p)
         L_white = self.L_white
         if L_white is None:
             t = tumblin_curve(L_max, L_wa, self.L_da, self.C_max, self.gamma_log) / self.L_dmax

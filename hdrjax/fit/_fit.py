@@ -1,0 +1,456 @@
+"""Fit an operator's parameters to target statistics with optimistix.
+
+Numeric contract: ``image`` is linear RGB ``(H, W, 3)`` as the operator expects it (relative
+or cd/m²); the fitted parameters are in the operator's own units. The loss is
+``Σ r²`` with ``r = target.residuals(operator(image_small))`` where ``image_small`` is the
+image box-filtered down to at most ``max_size`` pixels on its long side (64 by default:
+the percentile targets sort, ~0.7 Mpixel/s on CPU; pass ``max_size=None`` to fit at full
+resolution). Parameters the fit does not touch but that the operator measures (``None``)
+are measured once, from the full-resolution image, before the fit.
+
+Parametrisation (so the solver works on an unconstrained vector ``z``):
+
+- positive parameters (``log_space``, the default for all): ``p = exp(z)``;
+- bounds ``(lo, hi)``: ``p = lo + (hi − lo) σ(z)`` (in ``ln p`` when log-space and ``lo > 0``);
+  one-sided: ``p = lo + exp(z)`` or ``p = hi − exp(z)``.
+
+Every fit returns a :class:`FitResult` with an optimistix result code; a fit that runs out of
+steps or ends non-finite is marked unsuccessful (and raises only with ``throw=True``). The
+sensitivities are the Jacobian ``∂s/∂p`` of the target *statistics* with respect to the
+fitted parameters at the solution (forward-mode autodiff), in the parameters' own units.
+"""
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from jaxtyping import Array, ArrayLike, Bool, Float, Int
+
+from ..operators import make_operator
+from ..operators._base import AbstractOperator, as_float_image
+from ..targets import AbstractTarget
+
+_Bound = tuple[float | None, float | None]
+
+
+class FitResult(eqx.Module):
+    """The outcome of a fit (a pytree; batched along a leading axis by the batch fits).
+
+    Attributes:
+        operator: the operator with the fitted parameters (and the measured ones) set.
+        params: fitted values by name.
+        loss: ``Σ r²`` at the solution.
+        statistics: the target statistics at the solution, shape ``(n,)``.
+        residuals: the residual vector at the solution.
+        jacobian: ``∂statistics/∂param`` by name, each of shape ``(n, *param.shape)``.
+        steps: solver steps taken.
+        result: the optimistix result code (``optx.RESULTS.successful`` when converged).
+        names: the fitted parameter names, in order.
+    """
+
+    operator: AbstractOperator
+    params: dict[str, Array]
+    loss: Float[Array, ""]
+    statistics: Float[Array, " n"]
+    residuals: Float[Array, " m"]
+    jacobian: dict[str, Array]
+    steps: Int[Array, ""]
+    result: optx.RESULTS
+    names: tuple[str, ...] = eqx.field(static=True)
+
+    @property
+    def success(self) -> Bool[Array, "*batch"]:
+        """True where the solver converged to a finite solution."""
+        return self.result == optx.RESULTS.successful
+
+    def sensitivity(self) -> Float[Array, "*batch n k"]:
+        """Relative sensitivities (elasticities) ``(∂s/∂p) · p / s`` of scalar parameters,
+        one column per fitted name: the % change of each statistic per % change of each
+        parameter. Non-scalar parameters raise ``ValueError`` (use :attr:`jacobian`)."""
+        cols = []
+        for n in self.names:
+            p = self.params[n]
+            j = self.jacobian[n]
+            if j.ndim != self.statistics.ndim:
+                raise ValueError(f"sensitivity: {n} is not a scalar parameter; use .jacobian")
+            cols.append(j * p[..., None] / self.statistics)
+        return jnp.stack(cols, axis=-1)
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def downscale(image: Float[Array, "H W 3"], max_size: int | None) -> Float[Array, "h w 3"]:
+    """Box-filter ``image`` by the smallest integer factor that makes its long side at most
+    ``max_size`` (cropping the remainder rows/columns); ``None`` keeps it as is."""
+    if max_size is None:
+        return image
+    h, w = image.shape[-3], image.shape[-2]
+    f = -(-max(h, w) // int(max_size))
+    if f <= 1:
+        return image
+    hh, ww = h // f, w // f
+    x = image[..., : hh * f, : ww * f, :]
+    x = x.reshape(*x.shape[:-3], hh, f, ww, f, 3)
+    return jnp.mean(x, axis=(-4, -2))
+
+
+def _to_free(p: Array, bound: _Bound, log: bool) -> Array:
+    lo, hi = bound
+    tiny = jnp.finfo(p.dtype).tiny
+    if lo is not None and hi is not None:
+        if log and lo > 0:
+            u = (jnp.log(p) - jnp.log(lo)) / (jnp.log(hi) - jnp.log(lo))
+        else:
+            u = (p - lo) / (hi - lo)
+        eps = 1e-4  # start strictly inside, where the sigmoid still has a gradient
+        u = jnp.clip(u, eps, 1 - eps)
+        return jnp.log(u) - jnp.log1p(-u)
+    if lo is not None:
+        return jnp.log(jnp.maximum(p - lo, tiny))
+    if hi is not None:
+        return jnp.log(jnp.maximum(hi - p, tiny))
+    return jnp.log(p) if log else p
+
+
+def _from_free(z: Array, bound: _Bound, log: bool) -> Array:
+    lo, hi = bound
+    if lo is not None and hi is not None:
+        s = jax.nn.sigmoid(z)
+        if log and lo > 0:
+            return jnp.exp(jnp.log(lo) + (jnp.log(hi) - jnp.log(lo)) * s)
+        return lo + (hi - lo) * s
+    if lo is not None:
+        return lo + jnp.exp(z)
+    if hi is not None:
+        return hi - jnp.exp(z)
+    return jnp.exp(z) if log else z
+
+
+class _Problem(eqx.Module):
+    """Static description of a fit: which fields, how they are parametrised."""
+
+    names: tuple[str, ...] = eqx.field(static=True)
+    bounds: tuple[_Bound, ...] = eqx.field(static=True)
+    log: tuple[bool, ...] = eqx.field(static=True)
+
+    def to_free(self, op: AbstractOperator) -> dict[str, Array]:
+        return {
+            n: _to_free(jnp.asarray(getattr(op, n)), b, lg)
+            for n, b, lg in zip(self.names, self.bounds, self.log, strict=True)
+        }
+
+    def from_free(self, z: dict[str, Array]) -> dict[str, Array]:
+        cfg = zip(self.names, self.bounds, self.log, strict=True)
+        return {n: _from_free(z[n], b, lg) for n, b, lg in cfg}
+
+    def with_params(self, op: AbstractOperator, p: dict[str, Array]) -> AbstractOperator:
+        return eqx.tree_at(
+            lambda o: tuple(getattr(o, n) for n in self.names),
+            op,
+            tuple(p[n] for n in self.names),
+            is_leaf=lambda x: x is None,
+        )
+
+
+def _finish(
+    prob: _Problem,
+    op: AbstractOperator,
+    small: Array,
+    target: AbstractTarget,
+    z: dict[str, Array],
+    result: Any,
+    steps: Array,
+) -> FitResult:
+    p = prob.from_free(z)
+    fitted = prob.with_params(op, p)
+    out = fitted(small)
+    r = target.residuals(out)
+    stats = target.statistics(out)
+    jac = jax.jacfwd(lambda q: target.statistics(prob.with_params(op, q)(small)))(p)
+    loss = jnp.sum(r * r)
+    finite = jnp.isfinite(loss) & jnp.all(jnp.isfinite(stats))
+    for v in jax.tree_util.tree_leaves((p, jac)):
+        finite = finite & jnp.all(jnp.isfinite(v))
+    result = optx.RESULTS.where(finite, result, optx.RESULTS.nonfinite)
+    return FitResult(fitted, p, loss, stats, r, jac, steps, result, prob.names)
+
+
+def _solve_one(prob, op, image, target, solver, max_steps, max_size):
+    op = op.measure(image)
+    small = downscale(image, max_size)
+
+    def fn(z, args):
+        return target.residuals(prob.with_params(op, prob.from_free(z))(small))
+
+    sol = optx.least_squares(fn, solver, prob.to_free(op), max_steps=max_steps, throw=False)
+    return _finish(prob, op, small, target, sol.value, sol.result, sol.stats["num_steps"])
+
+
+def _throw(res: FitResult) -> FitResult:
+    return res.result.error_if(res, res.result != optx.RESULTS.successful)
+
+
+@eqx.filter_jit
+def _fit_jit(prob, op, image, target, solver, max_steps, max_size, throw):
+    res = _solve_one(prob, op, image, target, solver, max_steps, max_size)
+    return _throw(res) if throw else res
+
+
+@eqx.filter_jit
+def _fit_batch_jit(prob, op, frames, target, solver, max_steps, max_size, throw, batch_target):
+    def one(image, tgt):
+        return _solve_one(prob, op, image, tgt, solver, max_steps, max_size)
+
+    res = jax.vmap(one, in_axes=(0, 0 if batch_target else None))(frames, target)
+    return _throw(res) if throw else res
+
+
+@eqx.filter_jit
+def _fit_sequence_jit(prob, op, frames, target, solver, max_steps, max_size, throw, smoothness):
+    ops = jax.vmap(op.measure)(frames)
+    smalls = jax.vmap(lambda x: downscale(x, max_size))(frames)
+
+    def frame_residuals(o, small, z):
+        return target.residuals(prob.with_params(o, prob.from_free(z))(small))
+
+    def fn(z, args):
+        r = jax.vmap(frame_residuals)(ops, smalls, z).reshape(-1)
+        w = jnp.sqrt(jnp.asarray(smoothness, r.dtype))
+        d = [w * (v[1:] - v[:-1]).reshape(-1) for v in jax.tree_util.tree_leaves(z)]
+        return jnp.concatenate([r, *d])
+
+    z0 = jax.vmap(prob.to_free)(ops)
+    sol = optx.least_squares(fn, solver, z0, max_steps=max_steps, throw=False)
+    steps = sol.stats["num_steps"]
+    n = frames.shape[0]
+    res = jax.vmap(lambda o, s, z: _finish(prob, o, s, target, z, sol.result, steps))(
+        ops, smalls, sol.value
+    )
+    res = eqx.tree_at(lambda r: r.steps, res, jnp.broadcast_to(steps, (n,)))
+    return _throw(res) if throw else res
+
+
+def _setup(
+    operator: AbstractOperator | str,
+    target: AbstractTarget,
+    params: Sequence[str] | str | None,
+    solver: Any,
+    bounds: Mapping[str, _Bound] | None,
+    log_space: bool | Sequence[str],
+    rtol: float | None,
+    atol: float | None,
+) -> tuple[_Problem, AbstractOperator, Any]:
+    op = make_operator(operator) if isinstance(operator, str) else operator
+    if not isinstance(op, AbstractOperator):
+        raise ValueError(f"operator: expected an operator or a registered name, got {op!r}")
+    if not isinstance(target, AbstractTarget):
+        raise ValueError(f"target: expected an hdrjax.targets target, got {target!r}")
+    if isinstance(params, str):
+        params = (params,)
+    names = tuple(params) if params is not None else op.unset()
+    fields = {f.name for f in dataclasses.fields(op) if not f.metadata.get("static", False)}
+    if not names:
+        raise ValueError(
+            f"{op.name}: no parameters to fit; pass params=(...) from {sorted(fields)}"
+        )
+    bad = [n for n in names if n not in fields]
+    if bad or len(set(names)) != len(names):
+        raise ValueError(
+            f"params: {bad or list(names)} are not distinct parameters of {op.name}; "
+            f"valid: {', '.join(sorted(fields))}"
+        )
+    bounds = dict(bounds or {})
+    extra = sorted(set(bounds) - set(names))
+    if extra:
+        raise ValueError(f"bounds: {extra} are not fitted parameters {list(names)}")
+    if isinstance(log_space, bool):
+        log = tuple(log_space for _ in names)
+    else:
+        unknown = sorted(set(log_space) - set(names))
+        if unknown:
+            raise ValueError(f"log_space: {unknown} are not fitted parameters {list(names)}")
+        log = tuple(n in log_space for n in names)
+    bnds: list[_Bound] = []
+    for n, lg in zip(names, log, strict=True):
+        lo, hi = bounds.get(n, (None, None))
+        lo = None if lo is None else float(lo)
+        hi = None if hi is None else float(hi)
+        if lo is not None and hi is not None and not lo < hi:
+            raise ValueError(f"bounds[{n!r}]: expected lo < hi, got ({lo}, {hi})")
+        if lg and ((lo is not None and lo < 0) or (hi is not None and hi <= 0)):
+            raise ValueError(f"bounds[{n!r}]: ({lo}, {hi}) not positive; {n} is in log space")
+        bnds.append((lo, hi))
+    if solver is None:
+        x64 = jnp.result_type(float) == jnp.float64
+        rtol = rtol if rtol is not None else (1e-10 if x64 else 1e-5)
+        atol = atol if atol is not None else (1e-10 if x64 else 1e-6)
+        solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
+    elif rtol is not None or atol is not None:
+        raise ValueError("rtol/atol: set them on the solver you pass")
+    return _Problem(names, tuple(bnds), log), op, solver
+
+
+_ARGS_DOC = """
+    Args:
+        operator: an operator instance (its set parameters are the starting point; ``None``
+            ones are measured from the image) or a registered name.
+        {image}
+        target: an :mod:`hdrjax.targets` target (combine several with ``+``).
+        params: names of the array fields to fit (default: the operator's unset ones,
+            e.g. ``("key", "L_white", "log_average")`` for ``Reinhard2002()``).
+        solver: any optimistix least-squares solver or minimiser (e.g. ``optx.BFGS``);
+            default Levenberg–Marquardt with ``rtol``/``atol``.
+        bounds: ``{{name: (lo, hi)}}``, either side ``None`` for one-sided bounds.
+        log_space: optimise these (``True``: all) parameters as ``ln p``; they stay > 0.
+        max_steps: solver step limit; running out is a failure code, not an answer.
+        rtol, atol: tolerances of the default solver (1e-5/1e-6 in float32, 1e-10 in float64).
+        max_size: fit on the image box-filtered to this long side (``None``: full size).
+        throw: raise (``EquinoxRuntimeError``) when the fit fails instead of returning the
+            failure code.
+"""
+
+
+def fit(
+    operator: AbstractOperator | str,
+    image: Float[ArrayLike, "H W 3"],
+    target: AbstractTarget,
+    *,
+    params: Sequence[str] | str | None = None,
+    solver: Any = None,
+    bounds: Mapping[str, _Bound] | None = None,
+    log_space: bool | Sequence[str] = True,
+    max_steps: int = 100,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_size: int | None = 64,
+    throw: bool = False,
+) -> FitResult:
+    """Fit operator parameters so the tone-mapped image meets ``target`` (jit-compiled).
+
+    Returns:
+        A :class:`FitResult`; check ``result.success`` (or pass ``throw=True``).
+
+    Raises:
+        ValueError: unknown parameter names, bad bounds, or a malformed image.
+
+    >>> import jax.numpy as jnp, hdrjax.fit as hf, hdrjax.targets as ht
+    >>> img = jnp.exp(jnp.linspace(-3.0, 3.0, 48)).reshape(4, 4, 3)
+    >>> res = hf.fit("reinhard2002", img, ht.MeanLuminance(0.3), params="key")
+    >>> bool(res.success), round(float(res.statistics[0]), 4)
+    (True, 0.3)
+    """
+    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
+    image = as_float_image(image)
+    if image.ndim != 3:
+        raise ValueError(f"image: expected (H, W, 3), got {image.shape}; use fit_batch")
+    return _fit_jit(prob, op, image, target, solver, int(max_steps), max_size, bool(throw))
+
+
+fit.__doc__ = fit.__doc__.replace(  # type: ignore[union-attr]
+    "\n    Returns:", _ARGS_DOC.format(image="image: linear RGB ``(H, W, 3)``.") + "\n    Returns:"
+)
+
+
+def fit_batch(
+    operator: AbstractOperator | str,
+    frames: Float[ArrayLike, "T H W 3"],
+    target: AbstractTarget,
+    *,
+    params: Sequence[str] | str | None = None,
+    solver: Any = None,
+    bounds: Mapping[str, _Bound] | None = None,
+    log_space: bool | Sequence[str] = True,
+    max_steps: int = 100,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_size: int | None = 64,
+    throw: bool = False,
+    batch_target: bool = False,
+) -> FitResult:
+    """One independent fit per frame, in one compiled, vmapped call.
+
+    The result's fields carry a leading frame axis (``result.success`` is ``(T,)``); each
+    frame's fit equals :func:`fit` on that frame. The batched solve runs until the slowest
+    frame converges; converged frames stay put.
+
+    Returns:
+        A batched :class:`FitResult`.
+    """
+    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
+    frames = as_float_image(frames)
+    if frames.ndim != 4:
+        raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
+    return _fit_batch_jit(
+        prob, op, frames, target, solver, int(max_steps), max_size, bool(throw), bool(batch_target)
+    )
+
+
+fit_batch.__doc__ = fit_batch.__doc__.replace(  # type: ignore[union-attr]
+    "\n    Returns:",
+    _ARGS_DOC.format(image="frames: linear RGB ``(T, H, W, 3)``.")
+    + "        batch_target: the target's arrays have a leading frame axis (e.g. one\n"
+    "            :class:`~hdrjax.targets.Reference` per frame).\n" + "\n    Returns:",
+)
+
+
+def fit_sequence(
+    operator: AbstractOperator | str,
+    frames: Float[ArrayLike, "T H W 3"],
+    target: AbstractTarget,
+    *,
+    smoothness: float = 1.0,
+    params: Sequence[str] | str | None = None,
+    solver: Any = None,
+    bounds: Mapping[str, _Bound] | None = None,
+    log_space: bool | Sequence[str] = True,
+    max_steps: int = 100,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_size: int | None = 64,
+    throw: bool = False,
+) -> FitResult:
+    """Fit a video: every frame's parameters at once, with a penalty on their changes.
+
+    Minimises ``Σ_t Σ r_t² + smoothness · Σ_t ‖z_{t+1} − z_t‖²`` where ``z`` are the
+    unconstrained parameters (``ln p`` for log-space ones, so the penalty is on relative
+    changes). ``smoothness=0`` gives the independent per-frame fits; large values give one
+    shared parameter set. One solve over ``T × k`` unknowns (a dense ``(T·m) × (T·k)``
+    Jacobian), meant for clips of up to a few hundred frames.
+
+    Returns:
+        A batched :class:`FitResult`; ``loss`` is each frame's target loss (without the
+        penalty); ``steps`` and ``result`` are the joint solve's, repeated per frame.
+    """
+    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
+    frames = as_float_image(frames)
+    if frames.ndim != 4:
+        raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
+    if not float(smoothness) >= 0:
+        raise ValueError(f"smoothness: expected >= 0, got {smoothness}")
+    return _fit_sequence_jit(
+        prob,
+        op,
+        frames,
+        target,
+        solver,
+        int(max_steps),
+        max_size,
+        bool(throw),
+        jnp.asarray(smoothness),
+    )
+
+
+fit_sequence.__doc__ = fit_sequence.__doc__.replace(  # type: ignore[union-attr]
+    "\n    Returns:",
+    _ARGS_DOC.format(image="frames: linear RGB ``(T, H, W, 3)``, in time order.")
+    + "        smoothness: weight of the frame-to-frame penalty (≥ 0).\n"
+    + "\n    Returns:",
+)
+
+
+__all__ = ["FitResult", "downscale", "fit", "fit_batch", "fit_sequence"]

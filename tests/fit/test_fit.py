@@ -1,0 +1,168 @@
+"""hdrjax.fit: recovery of known parameters, sensitivities, result codes, bounds, batches."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+import pytest
+
+import hdrjax
+from hdrjax import fit as hf
+from hdrjax import targets as ht
+
+from ..conftest import DATA, RTOL32
+
+
+@pytest.fixture(scope="module")
+def cornell():
+    """The Cornell box (data/cornell_box.exr), box-filtered to 32 × 32 (float64 NumPy)."""
+    rgb = np.asarray(hdrjax.io.read(DATA / "cornell_box.exr").rgb(), np.float64)
+    return rgb.reshape(32, 16, 32, 16, 3).mean(axis=(1, 3))
+
+
+def _lognormal(seed, n=16):
+    return np.exp(np.random.default_rng(seed).normal(0.0, 1.5, (n, n, 3)))
+
+
+def test_recovers_tumblin_reinhard_from_reference_image(cornell, x64):
+    x = jnp.asarray(cornell)
+    true = hdrjax.make_operator("tumblin_reinhard", L_wa=0.6, L_white=0.7)
+    start = hdrjax.make_operator("tumblin_reinhard", L_wa=1.5, L_white=1.2)
+    res = hf.fit(start, x, ht.Reference(true(x)), params=("L_wa", "L_white"))
+    assert bool(res.success)
+    np.testing.assert_allclose(res.params["L_wa"], 0.6, rtol=1e-4)
+    np.testing.assert_allclose(res.params["L_white"], 0.7, rtol=1e-4)
+    assert float(res.loss) < 1e-12 and int(res.steps) > 1
+
+
+def test_recovers_reinhard_from_statistics_and_jacobian_matches_fd(cornell, x64):
+    x = jnp.asarray(cornell)
+    target0 = ht.MeanLuminance(0.0) + ht.Percentiles((5, 95), (0.0, 0.0))
+    true = hdrjax.make_operator("reinhard2002", key=0.3, L_white=2.5).measure(x)
+    stats = np.asarray(target0.statistics(true(x)))
+    target = ht.MeanLuminance(stats[0]) + ht.Percentiles((5, 95), stats[1:])
+    start = hdrjax.make_operator("reinhard2002", key=0.1, L_white=6.0)
+    res = hf.fit(start, x, target, params=("key", "L_white"))
+    assert bool(res.success)
+    np.testing.assert_allclose(res.params["key"], 0.3, rtol=1e-4)
+    np.testing.assert_allclose(res.params["L_white"], 2.5, rtol=1e-4)
+    np.testing.assert_allclose(res.statistics, stats, rtol=1e-8)
+    # sensitivities: central finite differences of the statistics at the solution
+    stats_at = jax.jit(
+        lambda k, w: target.statistics(
+            eqx.tree_at(lambda o: (o.key, o.L_white), res.operator, (k, w))(x)
+        )
+    )
+    k, w = float(res.params["key"]), float(res.params["L_white"])
+    for name, dk, dw in (("key", 1e-6 * k, 0.0), ("L_white", 0.0, 1e-6 * w)):
+        h = dk + dw
+        s = [
+            np.asarray(stats_at(jnp.asarray(k + e * dk), jnp.asarray(w + e * dw))) for e in (1, -1)
+        ]
+        np.testing.assert_allclose(res.jacobian[name], (s[0] - s[1]) / (2 * h), rtol=1e-6)
+    np.testing.assert_allclose(
+        res.sensitivity()[:, 0], res.jacobian["key"] * 0.3 / stats, rtol=1e-4
+    )
+
+
+def _linear_fit(x, target=None, **kw):
+    return hf.fit(
+        hdrjax.make_operator("linear", L_max=5.0),
+        x,
+        ht.MeanLuminance(0.25) if target is None else target,
+        params="L_max",
+        **kw,
+    )
+
+
+# The float32 16 × 16 Linear fits below share one compiled solve (same static settings).
+
+
+def test_converged_fit_meets_target_and_minimiser_agrees():
+    x = jnp.asarray(_lognormal(2), jnp.float32)
+    res = _linear_fit(x)
+    assert bool(res.success) and res.result == optx.RESULTS.successful
+    np.testing.assert_allclose(res.statistics, [0.25], rtol=RTOL32)
+    # Linear: display = rgb / L_max, clipped per channel; ∂/∂L_max of an unclipped channel
+    # value c is −c / L_max, of a clipped one 0
+    L_max = float(res.params["L_max"])
+    d = np.asarray(x) / L_max
+    dd = np.where(d < 1, -d / L_max, 0.0) @ np.asarray(hdrjax.REC709_WEIGHTS)
+    np.testing.assert_allclose(res.jacobian["L_max"], [dd.mean()], rtol=1e-3)
+    bfgs = _linear_fit(x, solver=optx.BFGS(rtol=1e-6, atol=1e-8))
+    assert bool(bfgs.success)
+    np.testing.assert_allclose(bfgs.params["L_max"], res.params["L_max"], rtol=1e-3)
+
+
+def test_non_convergence_is_a_failure_code_and_throw_raises():
+    x = jnp.asarray(_lognormal(0), jnp.float32)
+    res = _linear_fit(x, max_steps=2)
+    assert not bool(res.success)
+    assert res.result == optx.RESULTS.nonlinear_max_steps_reached
+    assert np.isfinite(float(res.loss)) and float(res.loss) > 1e-6
+    with pytest.raises(Exception, match="maximum number of steps"):
+        jax.block_until_ready(_linear_fit(x, max_steps=2, throw=True))
+
+
+def test_log_space_keeps_parameters_positive_and_bounds_hold():
+    # mean display luminance 1 needs every pixel clipped, i.e. L_max below the darkest
+    # pixel: a linear-space step can overshoot to L_max ≤ 0; log space stays positive.
+    x = jnp.asarray(_lognormal(1), jnp.float32)
+    res = _linear_fit(x, ht.MeanLuminance(1.0))
+    assert bool(res.success)
+    assert 0 < float(res.params["L_max"]) <= float(jnp.min(hdrjax.luminance(x)))
+    lin = _linear_fit(
+        x, ht.MeanLuminance(1.0), max_steps=30, log_space=False, bounds={"L_max": (0.5, 100.0)}
+    )
+    assert 0.5 <= float(lin.params["L_max"]) < 0.6  # from 5.0 towards the bound, never past
+
+
+def test_fit_batch_equals_separate_fits():
+    frames = jnp.asarray(np.stack([_lognormal(s) * (s + 1) for s in range(3)]), jnp.float32)
+    batch = hf.fit_batch(
+        hdrjax.make_operator("linear", L_max=5.0), frames, ht.MeanLuminance(0.25), params="L_max"
+    )
+    assert batch.success.shape == (3,) and bool(jnp.all(batch.success))
+    for i in range(3):
+        one = _linear_fit(frames[i])
+        np.testing.assert_allclose(batch.params["L_max"][i], one.params["L_max"], rtol=RTOL32)
+        np.testing.assert_allclose(batch.jacobian["L_max"][i], one.jacobian["L_max"], rtol=1e-3)
+        assert int(batch.steps[i]) == int(one.steps)
+
+
+def test_fit_sequence_smoothing():
+    frames = jnp.asarray(np.stack([_lognormal(3) * s for s in (1.0, 1.2, 3.0)]), jnp.float32)
+    op = hdrjax.make_operator("linear", L_max=5.0)
+    tgt = ht.MeanLuminance(0.25)
+    free = hf.fit_sequence(op, frames, tgt, smoothness=0.0, params="L_max")
+    stiff = hf.fit_sequence(op, frames, tgt, smoothness=1e4, params="L_max")
+    assert bool(jnp.all(free.success)) and bool(jnp.all(stiff.success))
+    for i in range(3):
+        one = _linear_fit(frames[i])
+        np.testing.assert_allclose(free.params["L_max"][i], one.params["L_max"], rtol=1e-3)
+    spread = lambda r: np.ptp(np.log(np.asarray(r.params["L_max"])))  # noqa: E731
+    assert spread(stiff) < 1e-2 * spread(free)
+
+
+def test_validation_errors():
+    x = jnp.ones((4, 4, 3))
+    tgt = ht.MeanLuminance(0.2)
+    with pytest.raises(ValueError, match="valid"):
+        hf.fit("linear", x, tgt, params="nope")
+    with pytest.raises(ValueError, match="lo < hi"):
+        hf.fit("linear", x, tgt, params="L_max", bounds={"L_max": (2.0, 1.0)})
+    with pytest.raises(ValueError, match="not fitted"):
+        hf.fit("linear", x, tgt, params="L_max", bounds={"ev100": (1.0, 2.0)})
+    with pytest.raises(ValueError, match="target"):
+        hf.fit("linear", x, 0.2, params="L_max")
+    with pytest.raises(ValueError, match="fit_batch"):
+        hf.fit("linear", jnp.ones((2, 4, 4, 3)), tgt, params="L_max")
+
+
+def test_downscale_is_a_box_filter():
+    x = jnp.arange(2 * 6 * 3, dtype=jnp.float32).reshape(2, 6, 3)
+    y = hf.downscale(x, 3)
+    assert y.shape == (1, 3, 3)
+    np.testing.assert_allclose(y[0, 0], np.asarray(x[:, :2]).mean(axis=(0, 1)))
+    assert hf.downscale(x, None) is x
