@@ -28,11 +28,10 @@ from jaxtyping import Array
 
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
 from ._base import (
-    AbstractOperator,
+    AbstractLuminanceCurve,
     Prepared,
     param,
     register,
-    scale_by_luminance,
     stats_of,
     weights_field,
 )
@@ -70,7 +69,7 @@ def reinhard_curve(L: Array, L_white: Array) -> Array:
 
 
 @register("reinhard2002")
-class Reinhard2002(AbstractOperator):
+class Reinhard2002(AbstractLuminanceCurve):
     """Reinhard et al. 2002 global photographic operator (see module docstring).
 
     Input: linear RGB, relative or absolute (the operator is scale invariant when ``key``,
@@ -110,11 +109,10 @@ class Reinhard2002(AbstractOperator):
         return Reinhard2002(key, white, lbar, self.delta, self.percentile_method, self.bins,
                             self.weights)
 
-    def _apply(self, p: Prepared) -> Array:
+    def _curve(self, L: Array) -> Array:
         assert self.key is not None and self.L_white is not None
         assert self.log_average is not None
-        scale = self.key / self.log_average
-        return scale_by_luminance(p.rgb, p.L, lambda L: reinhard_curve(scale * L, self.L_white))
+        return reinhard_curve((self.key / self.log_average) * L, self.L_white)
 
 
 __all__ = ["KEY_DEFAULT", "Reinhard2002", "jgt_key", "jgt_white", "reinhard_curve"]
