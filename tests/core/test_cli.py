@@ -109,3 +109,13 @@ def test_module_and_script_are_the_same_command():
 
     (ep,) = [e for e in entry_points(group="console_scripts") if e.name == "hdrjax"]
     assert ep.value == "hdrjax.cli:main"
+
+
+def test_luminance_uses_the_files_primaries(tmp_path, capsys):
+    """Carrots.exr carries ACES AP0 chromaticities: its luminance weights are
+    (0.34397, 0.72817, -0.07213) (SOURCES.md), and tonemap uses them."""
+    carrots = str(DATA / "Carrots.exr")
+    assert main(["info", carrots]) == 0
+    assert "luminance weights: (0.34397, 0.72817, -0.07213)" in capsys.readouterr().out
+    assert main(["tonemap", carrots, "-o", str(tmp_path / "c.png")]) == 0
+    assert "weights: (0.3440, 0.7282, -0.0721)" in capsys.readouterr().out

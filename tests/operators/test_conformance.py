@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import hdrjax
-from hdrjax.operators import parameter_names
+from hdrjax.operators import AbstractLuminanceCurve, parameter_names
 
 from ..conftest import RTOL32, enable_x64
 from .cases import SINGLE_PIXEL, hard_cases, make, natural
@@ -144,3 +144,26 @@ def test_parameters_are_declared(name):
     with pytest.raises(ValueError, match="valid"):
         hdrjax.make_operator(name, not_a_parameter=1.0)
     assert len(parameter_names(cls)) >= 1 or name == "simple"
+
+
+CURVES = [n for n in NAMES if issubclass(hdrjax.get_operator(n), AbstractLuminanceCurve)]
+
+
+@pytest.mark.parametrize("name", CURVES)
+def test_global_curves_are_monotone_in_luminance(name):
+    """hypothesis: for every global luminance curve, brighter grey pixels never get darker."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    op = eqx.filter_jit(lambda o, x: o.measure(x))(make(name), natural())
+    f = jax.jit(lambda o, x: o(x))
+
+    @settings(deadline=None, max_examples=15)
+    @given(st.lists(st.floats(1e-4, 1e4), min_size=2, max_size=64))
+    def check(values):
+        L = np.sort(np.asarray(values, np.float32))
+        grey = np.repeat(L[None, :, None], 3, axis=2)
+        out = np.asarray(f(op, grey))[0, :, 1]
+        assert np.all(np.diff(out) >= -1e-6 * np.maximum(np.abs(out[1:]), 1e-30)), name
+
+    check()

@@ -1,0 +1,27 @@
+"""notebooks/vision.ipynb runs from top to bottom and shows what it says it shows."""
+
+import json
+
+import matplotlib
+
+from ..conftest import REPO
+
+
+def test_vision_notebook_executes(monkeypatch):
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    monkeypatch.setattr(plt, "show", lambda *a, **k: None)
+    nb = json.loads((REPO / "notebooks" / "vision.ipynb").read_text())
+    ns: dict = {"__name__": "__main__"}
+    for i, cell in enumerate(c for c in nb["cells"] if c["cell_type"] == "code"):
+        exec(compile("".join(cell["source"]), f"vision.ipynb[{i}]", "exec"), ns)
+    plt.close("all")
+    sel = {name: set(rep.selected) for name, rep in ns["reports"].items()}
+    assert sel["daylight"] == set()
+    assert {"glare", "colour_loss", "contrast"} <= sel["dusk"] and "acuity" not in sel["dusk"]
+    assert {"acuity", "glare", "colour_loss", "blue_shift", "contrast"} == sel["night"]
+    assert ns["reports"]["starlight"].glare_variant == "scotopic"
+    # the stored outputs are those of this code (same selections printed)
+    printed = "".join("".join(o.get("text", "")) for c in nb["cells"] for o in c.get("outputs", []))
+    assert printed.count("acuity       yes") == 2 and "glare        no" in printed
