@@ -20,6 +20,8 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reinhard.py
+	$(PY) benchmarks/bench_rgbe_read.py
+	$(PY) benchmarks/bench_lights.py
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check hdrjax tests benchmarks

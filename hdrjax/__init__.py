@@ -11,6 +11,7 @@ from . import (
     fit as fit,
     io as io,
     layers as layers,
+    lights as lights,
     measure as measure,
     operators as operators,
     panorama as panorama,

@@ -1,0 +1,890 @@
+"""Light-source detection in environment maps after Loghin (2019), vectorised in JAX.
+
+Reference:
+    D.-A. Loghin, "Detection of light sources from environment maps", 2019,
+    http://alinloghin.com/articles/env_lights.html (Russian translation with the Python
+    listings: ``../shared/seeds/001_*.txt``).
+
+Numeric contract: input is linear RGB (relative or absolute; LDR maps in [0, 1] are
+treated as linear), channels last, any float dtype (float16 is computed in float32).
+Pixels with a NaN/±Inf channel are excluded (zero), negative values are clamped to zero.
+Outputs are float32, or float64 for float64 input under x64; none is NaN.
+
+Pipeline (seed steps 1–9; every step a fixed-shape array operation: no Python loop over
+samples or pixels, three compiled calls — see ``_run`` for why three):
+
+1. **Reduce** the map to at most ``width`` columns: box average by the smallest integer
+   factor (keeps each light's energy; the largest input luminance of each block is kept
+   too, for the peak), bilinear when the size is not a multiple.
+2. **Luminance** (:func:`hdrjax.luminance`), optionally a separable Gaussian **blur** of
+   ``blur`` pixels (wrapping across the seam; off by default, see below).
+3–4. **Hammersley** samples: ``n_samples`` points uniform on the sphere (the seed's
+   ``sphereSample``; Halton points on a plain image), mapped to pixels.
+5. **Neighbourhood maximum**: each sample searches a window (radius 0.75 × the sample
+   spacing, so the windows cover the sphere; on the sphere its columns span the same
+   angle at every latitude, and it wraps across the seam and the poles) on a 2×2
+   max-pooled image. A sample is a candidate when the window's maximum exceeds the
+   threshold ``T``; the candidate moves to that local maximum.
+6. **Sort** candidates by luminance (``lax.top_k``, at most ``max_candidates``).
+7. **Euclidean filter**: the seed's greedy pass (a candidate joins the first brighter kept
+   one within the window radius) as a fixed-point iteration on the candidate distance
+   matrix; distances are angles on the sphere, so the seam is no border.
+8. **Bresenham merge**: between every pair of kept candidates a fixed number of pixels
+   along the (seam-wrapped) line is read and the listing's running-mean test applied:
+   on an HDR map the listing's ``|mean − lum(start)| > 0.15 and mean < 1`` reduces to
+   "the running mean of ``min(lum, 1.25)`` drops below 1"; here the same with luminance in
+   units of ``T``. The greedy merge (a candidate joins the first brighter light whose seed
+   passes the test) is again a fixed-point iteration, and only merges within
+   ``max_radius`` degrees (the seed's suggested distance limit).
+9. **Light position and area** (the seed's suggested extension): each light grows from
+   its merged local maxima over the 8-connected pixels above ``T``, in a window of
+   ``±max_radius`` rows and twice that many columns (so ``max_radius`` in angle up to 60°
+   elevation) around the mean of its samples' local maxima, across the seam and poles;
+   where two lights reach the same pixel the geodesically nearer (then brighter) keeps it.
+   The pixels give the label image, energy, solid angle, colour, the direction (the
+   energy-weighted mean of the pixels' unit vectors: the seed's luminance-weighted
+   position, on the sphere) and the pixel position (the same mean in image coordinates).
+
+Deviations from the listing, and why: its fixed threshold 0.8 is for LDR maps; here it is
+relative to the map (below). The listing keeps each sample at its own pixel; here it moves
+to its window's maximum, so a light smaller than the sample spacing is placed on its peak,
+not on whichever sample saw it. The incremental position blend of the listing becomes the
+energy centroid of the light's pixels. Its undefined helpers (``computeNeighborLuminance``,
+``euclideanThresholdPixel``) get the window meaning above. The blur defaults to 0: after a
+box reduction there is no aliasing to remove, a blurred mask spreads beyond the light
+(into sky around the sun), and on the real maps blur 1 missed more lamps and cost ~1.5 ms
+(``benchmarks/bench_lights.py``).
+
+Automatic threshold (``threshold=None``), from the samples' median luminance ``m`` (the
+samples are uniform on the sphere: a solid-angle median) and the largest input luminance
+``M``: ``T = min(max(50 m, 0.02 M), 0.8 M)``. The first term is the bright-blob definition
+of ``SOURCES.md``; the cap reproduces the listing's 0.8 on LDR maps whose maximum is 1. A
+map with ``T < 2 m`` (black, constant, no contrast) has no light (``T = inf``).
+
+Known limits: within about ``max_radius`` of a pole a light spans more columns than its
+mask window, so its mask, energy and size are cut (its direction stays within a few
+degrees; ``tests/lights/test_detect.py``); a light larger than ``max_radius`` (or a
+flat-topped one whose brightest local maximum is on its rim) becomes several lights; at
+most ``max_lights`` lights, ``max_candidates`` candidates and ``4 max_lights`` kept
+candidates (``truncated`` says when a cap was hit).
+"""
+
+import dataclasses
+import functools
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._colour import REC709_WEIGHTS, luminance
+from .._stats import accurate_sum
+from ._result import Lights
+from ._sequences import halton_np, sphere_directions_np
+
+DEFAULT_WIDTH = 512
+"""Working width (pixels): see the accuracy/time table in the README (``benchmarks/``)."""
+DEFAULT_SAMPLES_PER_PIXEL = 0.006
+"""The listing's ``samplesMultiplier``: samples per working-resolution pixel."""
+DEFAULT_BLUR = 0.0
+"""Gaussian blur sigma in working-resolution pixels (the seed suggests 1–2 px at 1024)."""
+DEFAULT_MAX_RADIUS = 10.0
+"""Largest light radius in degrees: merge distance limit and mask window."""
+DEFAULT_MAX_LIGHTS = 32
+
+LINE_TOLERANCE = 0.0
+"""How far below ``T`` the line test's running mean may drop. The listing's 0.15 only acts
+when the start pixel is below 1.15 (LDR); on HDR maps its test is "mean ≥ 1", i.e. 0."""
+LINE_CLAMP = 1.25
+"""The listing's ``min(lum, 1.25)``, in units of ``T``."""
+AUTO_MEDIAN_FACTOR = 50.0
+AUTO_PEAK_FACTOR = 0.02
+LDR_FACTOR = 0.8
+"""The listing's fixed threshold, as a fraction of the maximum (cap of the automatic one)."""
+MIN_CONTRAST = 2.0
+
+
+@dataclasses.dataclass(frozen=True)
+class _Plan:
+    """Everything static about one detection: shapes, counts, radii (hashable)."""
+
+    sphere: bool
+    in_h: int
+    in_w: int
+    factor: int  # integer box factor; 0 means resize to (h, w)
+    h: int
+    w: int
+    n_samples: int
+    window: int  # sample window radius in pixels (rows; columns scale with 1/cos(el))
+    blur: float
+    nms_cos: float  # sphere: cos of the Euclidean-filter angle; plane: squared pixels
+    merge_cos: float  # sphere: cos of max_radius; plane: squared pixels
+    radius: int  # mask window radius (rows), pixels
+    radius_x: int  # mask window radius (columns), pixels
+    line_points: int
+    max_candidates: int
+    max_reps: int
+    max_lights: int
+    weights: tuple[float, float, float] | None
+
+
+def _working_size(in_h: int, in_w: int, width: int) -> tuple[int, int, int]:
+    """``(factor, h, w)``: reduce by the smallest integer factor that fits ``width``; factor 0
+    means "not a divisor: resample to (h, w)"."""
+    if int(width) != width or width < 4:
+        raise ValueError(f"width: expected an integer >= 4, got {width!r}")
+    if in_w <= width:
+        return 1, in_h, in_w
+    f = -(-in_w // int(width))
+    if in_w % f == 0 and in_h % f == 0:
+        return f, in_h // f, in_w // f
+    w = in_w // f
+    return 0, max(2, round(in_h * w / in_w)), w
+
+
+def _plan(
+    sphere: bool,
+    in_h: int,
+    in_w: int,
+    *,
+    width: int,
+    n_samples: int | None,
+    blur: float,
+    max_radius: float,
+    max_lights: int,
+    max_candidates: int | None,
+    weights: Sequence[float] | None,
+) -> _Plan:
+    if in_h < 2 or in_w < 4:
+        raise ValueError(f"map: expected at least 2 rows and 4 columns, got {in_h}x{in_w}")
+    if not (math.isfinite(blur) and blur >= 0):
+        raise ValueError(f"blur: expected a finite number >= 0, got {blur!r}")
+    if not (math.isfinite(max_radius) and max_radius > 0):
+        raise ValueError(f"max_radius: expected a finite number > 0, got {max_radius!r}")
+    if int(max_lights) != max_lights or max_lights < 1:
+        raise ValueError(f"max_lights: expected an integer >= 1, got {max_lights!r}")
+    factor, h, w = _working_size(in_h, in_w, width)
+    if n_samples is None:
+        n = max(64, round(DEFAULT_SAMPLES_PER_PIXEL * w * h))
+    else:
+        if int(n_samples) != n_samples or n_samples < 1:
+            raise ValueError(f"n_samples: expected an integer >= 1, got {n_samples!r}")
+        n = int(n_samples)
+    if sphere:
+        spacing = math.sqrt(4 * math.pi / n) * w / (2 * math.pi)
+        radius = math.ceil(math.radians(max_radius) * w / (2 * math.pi))
+        radius = max(1, min(radius, (w // 2 - 2) // 2, h - 1))
+    else:
+        spacing = math.sqrt(w * h / n)
+        radius = max(1, min(math.ceil(max_radius), (min(w, h) - 1) // 2))
+    window = max(1, min(math.ceil(0.75 * spacing), (min(w // 2, h) - 1) // 2))
+    if sphere:
+        nms = math.cos(window * 2 * math.pi / w)
+        merge = math.cos(math.radians(min(max_radius, 180.0)))
+    else:
+        nms, merge = float(window * window), float(radius * radius)
+    if max_candidates is not None and (int(max_candidates) != max_candidates or max_candidates < 1):
+        raise ValueError(f"max_candidates: expected an integer >= 1, got {max_candidates!r}")
+    c = min(n, int(max_candidates) if max_candidates else max(256, 8 * int(max_lights)))
+    return _Plan(
+        sphere=sphere,
+        in_h=in_h,
+        in_w=in_w,
+        factor=factor,
+        h=h,
+        w=w,
+        n_samples=n,
+        window=window,
+        blur=float(blur),
+        nms_cos=nms,
+        merge_cos=merge,
+        radius=radius,
+        radius_x=max(1, min(2 * radius, (w // 2 - 2) // 2)) if sphere else radius,
+        line_points=max(4, radius + 1),
+        max_candidates=c,
+        max_reps=min(c, 4 * int(max_lights)),
+        max_lights=int(max_lights),
+        weights=_weights(weights),
+    )
+
+
+_cached_plan = functools.lru_cache(maxsize=64)(_plan)
+
+
+def _weights(weights: Sequence[float] | None) -> tuple[float, float, float] | None:
+    """Hashable luminance weights; Rec.709 becomes ``None`` so that both share a compile."""
+    if weights is None:
+        return None
+    w = tuple(float(v) for v in weights)
+    if len(w) != 3 or not all(math.isfinite(v) for v in w):
+        raise ValueError(f"weights: expected three finite numbers, got {weights!r}")
+    return None if w == REC709_WEIGHTS else w
+
+
+# ----------------------------------------------------------------------------- geometry
+
+
+def _row_geometry(h: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """cos(el), sin(el) at row centres and each row's solid angle per pixel column (×W)."""
+    el = np.pi * (0.5 - (np.arange(h) + 0.5) / h)
+    theta = np.pi * np.arange(h + 1) / h
+    band = np.cos(theta[:-1]) - np.cos(theta[1:])  # exact band area / (2π)
+    return np.cos(el), np.sin(el), band * 2 * np.pi
+
+
+def _col_geometry(w: int) -> tuple[np.ndarray, np.ndarray]:
+    az = 2 * np.pi * ((np.arange(w) + 0.5) / w - 0.5)
+    return np.cos(az), np.sin(az)
+
+
+def _sample_pixels(plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
+    if plan.sphere:
+        d = sphere_directions_np(plan.n_samples)  # z = cos θ is up
+        u = np.arctan2(d[:, 1], d[:, 0]) / (2 * np.pi) + 0.5
+        v = 0.5 - np.arcsin(np.clip(d[:, 2], -1, 1)) / np.pi
+    else:
+        u, v = halton_np(plan.n_samples, 2).T
+    sx = np.clip(np.floor(u * plan.w), 0, plan.w - 1).astype(np.int64)
+    sy = np.clip(np.floor(v * plan.h), 0, plan.h - 1).astype(np.int64)
+    return sx, sy
+
+
+def _wrap_np(x: np.ndarray, y: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """Equirectangular neighbours: rows past a pole come back on the opposite meridian."""
+    top, bottom = y < 0, y >= h
+    y = np.where(top, -y - 1, np.where(bottom, 2 * h - 1 - y, y))
+    x = np.where(top | bottom, x + w // 2, x)
+    return np.mod(x, w), y
+
+
+def _pool_factor(plan: _Plan) -> int:
+    """The neighbourhood search runs on a 2×2 max-pooled image when the shape allows."""
+    ok = plan.h % 2 == 0 and plan.w % (4 if plan.sphere else 2) == 0 and plan.window >= 4
+    return 2 if ok else 1
+
+
+def _window_indices(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Flat indices into the pooled image of every sample's window ``(N, k)``, and the
+    samples' pixels.
+
+    A window spans ``±window`` pixels in rows. On the sphere its columns span
+    ``±window / cos(el)`` pixels (the same angle as at the equator; at most half the
+    row), read every ``1 / cos(el)`` pixels — one equator pixel in angle — or sparser
+    where more than ``2 × ceil(window / 2)`` steps per side would be needed (within ~15°
+    of the poles). The search runs on the 2×2 max-pooled image: offsets are in cells of
+    2 pixels.
+    """
+    sx, sy = _sample_pixels(plan)
+    q = _pool_factor(plan)
+    h, w = plan.h // q, plan.w // q
+    rr = -(-plan.window // q)  # window radius in cells (rows)
+    kmax = 2 * rr if plan.sphere else rr  # column steps per side
+    if plan.sphere:
+        ce = np.maximum(np.cos(np.pi * (0.5 - (sy + 0.5) / plan.h)), 1e-6)
+        ext = np.minimum(np.ceil(plan.window / ce / q), (w - 1) // 2).astype(np.int64)
+        step = np.maximum(1, np.round(1.0 / (q * ce))).astype(np.int64)
+        step = np.maximum(step, -(-ext // kmax))
+        k = -(-ext // step)  # this sample's steps per side
+    else:
+        step = np.ones_like(sx)
+        k = np.full_like(sx, rr)
+    cols = np.arange(-kmax, kmax + 1)[None, :]
+    dx = np.clip(cols, -k[:, None], k[:, None]) * step[:, None]  # past k: repeat the edge
+    rows = np.arange(-rr, rr + 1)
+    dx = np.repeat(dx, rows.size, axis=1)
+    dy = np.tile(rows, 2 * kmax + 1)[None, :]
+    cx, cy = (sx // q)[:, None] + dx, (sy // q)[:, None] + dy
+    if plan.sphere:
+        cx, cy = _wrap_np(cx, cy, w, h)
+    else:
+        cx, cy = np.clip(cx, 0, w - 1), np.clip(cy, 0, h - 1)
+    return (cy * w + cx).astype(np.int32), sx, sy
+
+
+# ----------------------------------------------------------------------------- image ops
+
+
+def _reduce(rgb: Array, f: int, weights: tuple[float, float, float] | None) -> tuple[Array, Array]:
+    """Clean and box-average ``f × f`` blocks of the input; also each block's peak luminance.
+
+    A pixel with any non-finite channel (its luminance is then non-finite) counts as zero;
+    negative values are clamped to zero. The blocks are summed as slices of a
+    ``(h, f, w·f·3)`` view, which XLA:CPU runs in one pass (a 5-D reshape-and-reduce, or
+    strided slices of the channel axis, ran 3–5x slower).
+    """
+    lum = luminance(rgb, weights)
+    ok = jnp.isfinite(lum)
+    clean = jnp.where(ok[..., None], jnp.maximum(rgb, 0), 0)
+    lum = jnp.where(ok, jnp.maximum(lum, 0), 0)
+    if f == 1:
+        return clean, lum
+    H, W = rgb.shape[0] // f, rgb.shape[1] // f
+    x = clean.reshape(H, f, W * f * 3)
+    x = sum(x[:, i] for i in range(f)).reshape(H, W, f, 3)
+    p = lum.reshape(H, f, W * f)
+    p = functools.reduce(jnp.maximum, [p[:, i] for i in range(f)]).reshape(H, W, f)
+    return sum(x[:, :, j] for j in range(f)) / (f * f), functools.reduce(
+        jnp.maximum, [p[:, :, j] for j in range(f)]
+    )
+
+
+def _blur(L: Array, sigma: float, wrap: bool) -> Array:
+    """Separable Gaussian (truncated at 2σ, renormalised over the taps inside the image);
+    columns wrap on the sphere.
+
+    The horizontal pass runs on the transpose: XLA:CPU does shifted row slices much
+    faster than shifted column slices (1.3 ms vs 2.1 ms at 1024×512).
+    """
+    if sigma <= 0:
+        return L
+    r = max(1, math.ceil(2 * sigma))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    k = k / k.sum()
+
+    def along_rows(x: Array, wrap_rows: bool) -> Array:
+        n = x.shape[0]
+        if wrap_rows:
+            p = jnp.concatenate([x[n - r :], x, x[:r]], axis=0)
+            return sum(float(k[i]) * p[i : i + n] for i in range(2 * r + 1))
+        p = jnp.pad(x, ((r, r), (0, 0)))
+        inside = np.convolve(np.ones(n), k, mode="same")  # tap weight inside the image
+        out = sum(float(k[i]) * p[i : i + n] for i in range(2 * r + 1))
+        return out * jnp.asarray(1.0 / inside, x.dtype)[:, None]
+
+    return along_rows(along_rows(L, False).T, wrap).T
+
+
+def _dilate8(x: Array) -> Array:
+    """3×3 binary dilation over the last two axes (zero outside)."""
+    p = jnp.pad(x, [(0, 0)] * (x.ndim - 2) + [(1, 1), (1, 1)])
+    rows = p[..., :-2, :] | p[..., 1:-1, :] | p[..., 2:, :]
+    return rows[..., :-2] | rows[..., 1:-1] | rows[..., 2:]
+
+
+# ----------------------------------------------------------------------------- clustering
+
+
+def _leaders(adj: Array, valid: Array) -> Array:
+    """Greedy leader clustering in index order, as a fixed point.
+
+    ``adj[i, j]`` (only used for ``i < j``) says ``j`` may join ``i``. Item ``j`` leads
+    when it is valid and no earlier leader may take it: the seed's sequential loops. The
+    iteration ``lead ← valid ∧ ¬(adjᵀ lead)`` fixes one more prefix item per step and stops
+    at the unique fixed point (usually after a few steps).
+    """
+    n = valid.shape[0]
+    upper = jnp.triu(jnp.ones((n, n), bool), 1)
+    adj = adj & upper
+
+    def step(state: tuple[Array, Array]) -> tuple[Array, Array]:
+        lead, _ = state
+        return valid & ~jnp.any(adj & lead[:, None], axis=0), lead
+
+    lead, _ = jax.lax.while_loop(lambda s: jnp.any(s[0] != s[1]), step, (valid, ~valid))
+    return lead
+
+
+def _owner(adj: Array, lead: Array, valid: Array) -> Array:
+    """Index of the first leader that takes each item (itself for a leader; −1 if invalid)."""
+    n = valid.shape[0]
+    idx = jnp.arange(n)
+    takes = lead[:, None] & ((adj & (idx[:, None] < idx[None, :])) | jnp.eye(n, dtype=bool))
+    first = jnp.argmax(takes, axis=0)
+    return jnp.where(valid & jnp.any(takes, axis=0), first, -1)
+
+
+def _compact(mask: Array, size: int) -> tuple[Array, Array, Array]:
+    """Positions of the first ``size`` True entries, a validity mask, and each entry's rank."""
+    rank = jnp.cumsum(mask) - 1
+    slot = jnp.where(mask & (rank < size), rank, size)
+    pos = (
+        jnp.zeros(size, jnp.int32)
+        .at[slot]
+        .set(jnp.arange(mask.shape[0], dtype=jnp.int32), mode="drop")
+    )
+    return pos, jnp.arange(size) < jnp.sum(mask), jnp.where(mask, rank, -1)
+
+
+# ----------------------------------------------------------------------------- the pipeline
+
+
+def _threshold(L: Array, sample_vals: Array, thr: Array) -> Array:
+    """The user's threshold, or the automatic one (module docstring); ``inf`` = no light."""
+    med = jnp.median(sample_vals)
+    top = jnp.max(L)
+    auto = jnp.maximum(AUTO_MEDIAN_FACTOR * med, AUTO_PEAK_FACTOR * top)
+    auto = jnp.minimum(auto, LDR_FACTOR * top)
+    auto = jnp.where((top > 0) & (auto > 0) & (auto >= MIN_CONTRAST * med), auto, jnp.inf)
+    user = jnp.where(thr > 0, thr, jnp.inf)
+    return jnp.where(jnp.isnan(thr), auto, user).astype(L.dtype)
+
+
+def _working_rgb(
+    rgb: Array, factor: int, hw: tuple[int, int], weights: tuple[float, float, float] | None
+) -> tuple[Array, Array]:
+    """Step 1: the cleaned map at the working resolution and each pixel's peak luminance
+    (the largest input pixel it covers; the working luminance itself when not reduced by
+    an integer factor)."""
+    if factor >= 1:
+        return _reduce(rgb, factor, weights)
+    small = jax.image.resize(_reduce(rgb, 1, weights)[0], hw + (3,), "linear")
+    small = jnp.maximum(small, 0)
+    return small, jnp.maximum(luminance(small, weights), 0)
+
+
+def _prepare(rgb: Array, plan: _Plan) -> tuple[Array, Array]:
+    return _working_rgb(rgb, plan.factor, (plan.h, plan.w), plan.weights)
+
+
+def _smooth(rgb_w: Array, plan: _Plan) -> tuple[Array, Array, Array]:
+    """Step 2: luminance, its blur, and the blur max-pooled for the window search."""
+    L = jnp.maximum(luminance(rgb_w, plan.weights), 0)
+    Lb = _blur(L, plan.blur, plan.sphere)
+    if _pool_factor(plan) == 2:
+        rows = jnp.maximum(Lb[0::2], Lb[1::2])
+        pooled = jnp.maximum(rows[:, 0::2], rows[:, 1::2])
+    else:
+        pooled = Lb
+    return L, Lb, pooled
+
+
+def _find(
+    rgb_w: Array, L_peak: Array, L: Array, Lb: Array, pooled: Array, thr: Array, plan: _Plan
+) -> dict[str, Array]:
+    """Steps 3–9 on the prepared images."""
+    dt = L.dtype
+    H, W = plan.h, plan.w
+    K, R, C = plan.max_lights, plan.max_reps, plan.max_candidates
+    Lf, Lbf = L.reshape(-1), Lb.reshape(-1)
+
+    # 3-5: samples and their neighbourhood maximum (on the pooled image, then the best
+    # 2×2 block's pixels), threshold
+    widx, sx, sy = _window_indices(plan)
+    q = _pool_factor(plan)
+    win = pooled.reshape(-1)[jnp.asarray(widx)]
+    best = jnp.take_along_axis(jnp.asarray(widx), jnp.argmax(win, axis=1)[:, None], 1)[:, 0]
+    by, bx = best // (W // q), best % (W // q)
+    cand_y = (q * by)[:, None] + jnp.asarray([0, 0, 1, 1] if q == 2 else [0])[None, :]
+    cand_x = (q * bx)[:, None] + jnp.asarray([0, 1, 0, 1] if q == 2 else [0])[None, :]
+    vals = Lbf[cand_y * W + cand_x]
+    pick4 = jnp.argmax(vals, axis=1)[:, None]
+    m = jnp.take_along_axis(vals, pick4, 1)[:, 0]
+    local = jnp.take_along_axis(cand_y * W + cand_x, pick4, 1)[:, 0]
+    T = _threshold(L_peak, Lbf[jnp.asarray(sy * W + sx)], thr)
+    safe_T = jnp.where(jnp.isfinite(T), T, 1.0)
+
+    # 6: sort candidates
+    is_cand = m > T
+    cval, cidx = jax.lax.top_k(jnp.where(is_cand, m, -jnp.inf), C)
+    cvalid = cval > T
+    cflat = local[cidx]
+    cy, cx = cflat // W, cflat % W
+
+    if plan.sphere:
+        ce, se, band = (jnp.asarray(a, dt) for a in _row_geometry(H))
+        ca, sa = (jnp.asarray(a, dt) for a in _col_geometry(W))
+        domega = band / W
+
+        def unit(x: Array, y: Array) -> Array:
+            return jnp.stack([ce[y] * sa[x], se[y], -ce[y] * ca[x]], axis=-1)
+
+        cdir = unit(cx, cy)
+        close = (cdir @ cdir.T) > plan.nms_cos
+    else:
+        domega = jnp.ones(H, dt)
+        cpos = jnp.stack([cx, cy], -1).astype(dt)
+        close = jnp.sum((cpos[:, None] - cpos[None]) ** 2, -1) < plan.nms_cos
+
+    # 7: Euclidean filter
+    lead = _leaders(close, cvalid)
+    rep_c, rvalid, crank = _compact(lead, R)
+    cowner = _owner(close, lead, cvalid)
+    rx, ry = cx[rep_c], cy[rep_c]
+    rvalid = rvalid & cvalid[rep_c]
+
+    # 8: Bresenham merge (fixed-length lines, seam-wrapped)
+    S = plan.line_points
+    t = (jnp.arange(1, S + 1, dtype=dt) / S)[None, None, :]
+    ddx = (rx[None, :] - rx[:, None]).astype(dt)
+    if plan.sphere:
+        ddx = jnp.mod(ddx + W // 2, W) - W // 2
+    ddy = (ry[None, :] - ry[:, None]).astype(dt)
+    lx = jnp.round(rx[:, None, None] + t * ddx[..., None]).astype(jnp.int32)
+    ly = jnp.round(ry[:, None, None] + t * ddy[..., None]).astype(jnp.int32)
+    lx = jnp.mod(lx, W) if plan.sphere else jnp.clip(lx, 0, W - 1)
+    ly = jnp.clip(ly, 0, H - 1)
+    c = jnp.minimum(Lbf[ly * W + lx] / safe_T, LINE_CLAMP) - (1.0 - LINE_TOLERANCE)
+    # running mean >= 1 - tol at every step  <=>  every prefix sum of c >= 0 (unrolled:
+    # a cumsum here became an O(S²) reduce-window on XLA:CPU)
+    acc = c[..., 0]
+    passes = acc >= 0
+    for k in range(1, S):
+        acc = acc + c[..., k]
+        passes = passes & (acc >= 0)
+    if plan.sphere:
+        rdir = cdir[rep_c]
+        near = (rdir @ rdir.T) >= plan.merge_cos
+    else:
+        near = (ddx**2 + ddy**2) <= plan.merge_cos
+    merge = passes & near & rvalid[:, None] & rvalid[None, :]
+    llead = _leaders(merge, rvalid)
+    light_rep, lvalid, _ = _compact(llead, K)
+    lvalid = lvalid & rvalid[light_rep]
+    n_found = jnp.sum(llead)
+    rep_owner = _owner(merge, llead, rvalid)
+    lrank = jnp.cumsum(llead) - 1
+    rep_light = jnp.where(rep_owner >= 0, lrank[jnp.maximum(rep_owner, 0)], -1)
+    rep_light = jnp.where(rep_light < K, rep_light, -1)
+
+    # 9: grow each light over the connected pixels above T, in a window around the mean
+    # of the local maxima its samples found (a flat-topped light's seed may sit on its
+    # rim). On the sphere the window is twice as wide as high: it then spans max_radius
+    # in angle up to 60° of elevation.
+    ry_, rx_ = plan.radius, plan.radius_x
+    PY, PX = 2 * ry_ + 1, 2 * rx_ + 1
+    sxk, syk = rx[light_rep], ry[light_rep]
+    crep = jnp.where(cowner >= 0, crank[jnp.maximum(cowner, 0)], -1)
+    clight = jnp.where((crep >= 0) & (crep < R), rep_light[jnp.clip(crep, 0, R - 1)], -1)
+
+    def rel(x: Array, y: Array, owner: Array, cx: Array, cy: Array) -> tuple[Array, Array]:
+        dx = x - cx[jnp.maximum(owner, 0)]
+        if plan.sphere:
+            dx = jnp.mod(dx + W // 2, W) - W // 2
+        return dx, y - cy[jnp.maximum(owner, 0)]
+
+    member = (clight[:, None] == jnp.arange(K)[None, :]) & cvalid[:, None]
+    mdx, mdy = rel(cx, cy, clight, sxk, syk)
+    n_mem = jnp.maximum(jnp.sum(member, axis=0), 1)
+    ox = jnp.round(jnp.sum(member * mdx[:, None], axis=0) / n_mem).astype(sxk.dtype)
+    oy = jnp.round(jnp.sum(member * mdy[:, None], axis=0) / n_mem).astype(syk.dtype)
+    wx = jnp.mod(sxk + ox, W) if plan.sphere else jnp.clip(sxk + ox, 0, W - 1)
+    wy = jnp.clip(syk + oy, 0, H - 1)
+    X = jnp.broadcast_to(wx[:, None, None] + jnp.arange(-rx_, rx_ + 1)[None, None, :], (K, PY, PX))
+    Y = jnp.broadcast_to(wy[:, None, None] + jnp.arange(-ry_, ry_ + 1)[None, :, None], (K, PY, PX))
+    if plan.sphere:
+        top, bottom = Y < 0, Y >= H
+        Y = jnp.where(top, -Y - 1, jnp.where(bottom, 2 * H - 1 - Y, Y))
+        X = jnp.mod(jnp.where(top | bottom, X + W // 2, X), W)
+        inside = jnp.ones((K, PY, PX), bool)
+    else:
+        inside = (X >= 0) & (X < W) & (Y >= 0) & (Y < H)
+        X, Y = jnp.clip(X, 0, W - 1), jnp.clip(Y, 0, H - 1)
+    inside = inside & lvalid[:, None, None]
+    flat = Y * W + X
+    above = inside & (Lbf[flat] > T)
+    # seeds: every merged local maximum, placed in its light's window
+    rdx, rdy = rel(rx, ry, rep_light, wx, wy)
+    ok = (rep_light >= 0) & rvalid & (jnp.abs(rdx) <= rx_) & (jnp.abs(rdy) <= ry_)
+    seeds = (
+        jnp.zeros((K, PY, PX), bool)
+        .at[jnp.where(ok, rep_light, K), rdy + ry_, rdx + rx_]
+        .set(True, mode="drop")
+    )
+    filled = seeds & above
+    big = PY * PX + 1
+    dist = jnp.where(filled, 0, big).astype(jnp.int32)
+
+    def grow(state: tuple[Array, Array, Array, Array]) -> tuple[Array, Array, Array, Array]:
+        fill, d, step, _ = state
+        new = above & _dilate8(fill) & ~fill
+        return fill | new, jnp.where(new, step + 1, d), step + 1, jnp.any(new)
+
+    filled, dist, _, _ = jax.lax.while_loop(
+        lambda s: s[3] & (s[2] < big), grow, (filled, dist, jnp.int32(0), jnp.bool_(True))
+    )
+    # a pixel two lights reach goes to the nearer (geodesic steps), then the brighter
+    kk = jnp.arange(K, dtype=jnp.int32)[:, None, None]
+    key = jnp.where(filled, dist * K + kk, big * K).astype(jnp.int32)
+    lab = jnp.full(H * W, big * K, jnp.int32).at[flat.reshape(-1)].min(key.reshape(-1))
+    own = filled & (lab[flat] == key)
+    lab = jnp.where(lab < big * K, lab % K, -1)
+
+    # light properties from its pixels
+    dw = domega[Y] * own
+    Lw = Lf[flat]
+    wgt = Lw * dw
+    energy = jnp.sum(wgt, axis=(1, 2))
+    omega = jnp.sum(dw, axis=(1, 2))
+    # per-channel gathers from channel planes, and the unit vectors' separable form below:
+    # building (K, h, w, 3) arrays here cost more than the rest of step 9
+    planes = jnp.moveaxis(rgb_w, -1, 0).reshape(3, -1)
+    rgb_sum = jnp.stack([jnp.sum(dw * planes[c][flat], axis=(1, 2)) for c in range(3)], -1)
+    safe_omega = jnp.where(omega > 0, omega, 1.0)
+    colour = rgb_sum / safe_omega[:, None]
+    mean_lum = energy / safe_omega
+    n_pix = jnp.sum(own, axis=(1, 2))
+    lvalid = lvalid & (n_pix > 0) & (energy > 0)
+    peak = jnp.max(jnp.where(own, L_peak.reshape(-1)[flat], 0), axis=(1, 2))
+    total = accurate_sum(L * domega[:, None])
+    share = energy / jnp.where(total > 0, total, 1.0)
+    scale_x, scale_y = plan.in_w / W, plan.in_h / H
+    if plan.sphere:
+        wc = wgt * ce[Y]
+        vec = jnp.stack(
+            [
+                jnp.sum(wc * sa[X], (1, 2)),
+                jnp.sum(wgt * se[Y], (1, 2)),
+                -jnp.sum(wc * ca[X], (1, 2)),
+            ],
+            axis=-1,
+        )
+        norm = jnp.linalg.norm(vec, axis=-1, keepdims=True)
+        direction = jnp.where(norm > 0, vec / jnp.where(norm > 0, norm, 1.0), unit(sxk, syk))
+    else:
+        direction = jnp.zeros((K, 3), dt)
+        omega = jnp.zeros(K, dt)
+    # energy-weighted mean pixel position, columns unwrapped around the window centre (no
+    # trigonometry here: XLA:CPU compiles each transcendental into a large kernel; the
+    # azimuth, elevation and angular size are computed from these on demand)
+    safe_e = jnp.where(energy > 0, energy, 1.0)
+    offx = jnp.arange(-rx_, rx_ + 1, dtype=dt)[None, None, :]
+    cxw = wx.astype(dt) + jnp.sum(wgt * offx, axis=(1, 2)) / safe_e
+    cxw = jnp.mod(cxw + 0.5, W) - 0.5 if plan.sphere else cxw
+    cyw = jnp.sum(wgt * Y, axis=(1, 2)) / safe_e
+    pixel = jnp.stack([(cxw + 0.5) * scale_x - 0.5, (cyw + 0.5) * scale_y - 0.5], axis=-1)
+    peak_pixel = jnp.stack([(sxk + 0.5) * scale_x - 0.5, (syk + 0.5) * scale_y - 0.5], -1)
+
+    # samples: which light holds each candidate's local maximum
+    clab = jnp.where(cvalid, lab[cflat], -1)
+    n_samples = jnp.sum(clab[None, :] == jnp.arange(K)[:, None], axis=1)
+
+    # largest energy first; relabel
+    order = jnp.argsort(-jnp.where(lvalid, energy, -1.0), stable=True)
+    inv = jnp.zeros(K, jnp.int32).at[order].set(jnp.arange(K, dtype=jnp.int32))
+    lvalid = lvalid[order]
+    count = jnp.sum(lvalid)
+
+    def relabel(a: Array) -> Array:
+        b = jnp.where(a >= 0, inv[jnp.maximum(a, 0)], -1)
+        return jnp.where(b < count, b, -1).astype(jnp.int32)
+
+    # one packed table, one gather: each separate output array is a kernel XLA compiles
+    fields = {
+        "direction": direction,
+        "pixel": pixel,
+        "peak_pixel": peak_pixel,
+        "peak_luminance": peak,
+        "mean_luminance": mean_lum,
+        "colour": colour,
+        "irradiance": rgb_sum,
+        "solid_angle": omega,
+        "area": n_pix * (scale_x * scale_y),
+        "energy": energy,
+        "energy_share": share,
+        "n_samples": n_samples,
+    }
+    cols = [jnp.reshape(v, (K, -1)).astype(dt) for v in fields.values()]
+    table = jnp.where(lvalid[:, None], jnp.concatenate(cols, axis=1)[order], 0)
+    out: dict[str, Array] = {}
+    start = 0
+    for (name, v), c in zip(fields.items(), cols, strict=True):
+        out[name] = table[:, start : start + c.shape[1]].reshape(v.shape)
+        start += c.shape[1]
+    out["n_samples"] = out["n_samples"].astype(jnp.int32)
+    samples = jnp.stack(
+        [
+            (jnp.asarray(sx)[cidx] + 0.5) * scale_x - 0.5,
+            (jnp.asarray(sy)[cidx] + 0.5) * scale_y - 0.5,
+        ],
+        axis=-1,
+    )
+    truncated = (jnp.sum(is_cand) > C) | (jnp.sum(lead) > R) | (n_found > K)
+    return dict(
+        count=count.astype(jnp.int32),
+        n_found=n_found.astype(jnp.int32),
+        truncated=truncated,
+        valid=lvalid,
+        **out,
+        labels=relabel(lab).reshape(H, W),
+        samples=jnp.where(cvalid[:, None], samples, 0).astype(dt),
+        sample_light=relabel(clab),
+        threshold=T,
+    )
+
+
+def _flat(x: Array, batch: tuple[int, ...]) -> Array:
+    return x.reshape((math.prod(batch),) + x.shape[len(batch) :])
+
+
+def _flat_float(x: Array, batch: tuple[int, ...]) -> Array:
+    """Batch axes flattened into one; float16/integer input computed in the default float."""
+    x = _flat(x, batch)
+    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
+        x = x.astype(jnp.result_type(float))
+    return x
+
+
+def _image_shape(image: ArrayLike, name: str) -> tuple[tuple[int, ...], int, int]:
+    """``(batch, H, W)`` of a ``(..., H, W, 3)`` image; ValueError otherwise."""
+    shape = np.shape(image)
+    if len(shape) < 3 or shape[-1] != 3:
+        raise ValueError(f"{name}: expected channels-last RGB (..., H, W, 3), got shape {shape}")
+    batch = tuple(int(v) for v in shape[:-3])
+    if math.prod(batch) == 0:
+        raise ValueError(f"{name}: empty batch {batch}")
+    return batch, int(shape[-3]), int(shape[-2])
+
+
+@functools.partial(jax.jit, static_argnames=("plan", "batch"))
+def _prepare_batch(rgb: Array, plan: _Plan, batch: tuple[int, ...]) -> tuple[Array, Array]:
+    return jax.vmap(lambda v: _prepare(v, plan))(_flat_float(rgb, batch))
+
+
+@functools.partial(jax.jit, static_argnames=("plan",))
+def _smooth_batch(rgb_w: Array, plan: _Plan) -> tuple[Array, Array, Array]:
+    return jax.vmap(lambda x: _smooth(x, plan))(rgb_w)
+
+
+@functools.partial(jax.jit, static_argnames=("plan", "batch"))
+def _find_batch(
+    prepared: tuple[Array, Array],
+    smooth: tuple[Array, Array, Array],
+    thr: Array,
+    plan: _Plan,
+    batch: tuple[int, ...],
+) -> Lights:
+    dt = prepared[0].dtype
+    thr = _flat(jnp.asarray(thr, dt), batch)
+    out = jax.vmap(lambda p, s, t: _find(*p, *s, t, plan))(prepared, smooth, thr)
+    out = {k: v.reshape(batch + v.shape[1:]) for k, v in out.items()}
+    return Lights(
+        **out,
+        projection="equirectangular" if plan.sphere else "plane",
+        input_shape=(plan.in_h, plan.in_w),
+    )
+
+
+def _run(
+    image: ArrayLike,
+    name: str,
+    sphere: bool,
+    *,
+    threshold: float | ArrayLike | None,
+    **options: Any,
+) -> Lights:
+    batch, in_h, in_w = _image_shape(image, name)
+    if options.get("weights") is not None:
+        options["weights"] = tuple(float(v) for v in options["weights"])
+    plan = _cached_plan(sphere, in_h, in_w, **options)
+    # always an array of the batch's shape: one compiled signature for every threshold
+    if threshold is None:
+        thr: Any = np.full(batch, np.nan, np.float32)
+    elif isinstance(threshold, int | float):
+        if not (math.isfinite(threshold) and threshold > 0):
+            raise ValueError(f"threshold: expected a finite luminance > 0, got {threshold!r}")
+        thr = np.full(batch, threshold, np.float64 if jax.config.jax_enable_x64 else np.float32)
+    elif isinstance(threshold, jax.core.Tracer):
+        thr = jnp.broadcast_to(threshold, batch)
+    else:
+        t = np.asarray(threshold, np.float64)
+        if not np.all(np.isfinite(t) & (t > 0)) or np.broadcast_shapes(t.shape, batch) != batch:
+            raise ValueError(f"threshold: expected finite luminances > 0 of shape {batch}")
+        thr = np.broadcast_to(t, batch).astype(
+            np.float64 if jax.config.jax_enable_x64 else np.float32
+        )
+    # Three compiled calls on purpose: in one, XLA:CPU fuses the reduction of the
+    # full-resolution map into each of its consumers and the blur into every gather that
+    # reads it, recomputing them per read (3x slower in total); a call boundary
+    # materialises each image once.
+    prepared = _prepare_batch(image, plan, batch)
+    return _find_batch(prepared, _smooth_batch(prepared[0], plan), thr, plan, batch)
+
+
+def detect(
+    envmap: Float[ArrayLike, "*batch H W 3"],
+    *,
+    width: int = DEFAULT_WIDTH,
+    n_samples: int | None = None,
+    threshold: float | Float[ArrayLike, "*batch"] | None = None,
+    blur: float = DEFAULT_BLUR,
+    max_radius: float = DEFAULT_MAX_RADIUS,
+    max_lights: int = DEFAULT_MAX_LIGHTS,
+    max_candidates: int | None = None,
+    weights: Sequence[float] | None = None,
+) -> Lights:
+    """Find the light sources of an equirectangular environment map (module docstring).
+
+    Args:
+        envmap: linear RGB lat-long map(s), channels last, top row = zenith; leading batch
+            axes go through one vmapped, compiled call.
+        width: working width in pixels (the map is reduced to at most this; never enlarged).
+        n_samples: Hammersley samples on the sphere; default ``0.006 × w × h`` of the working
+            resolution (the listing's ``samplesMultiplier``), at least 64.
+        threshold: luminance threshold in the map's units (per map for a batch);
+            ``None`` → automatic (module docstring).
+        blur: Gaussian sigma in working pixels (0 = none).
+        max_radius: largest light radius in degrees: the merge distance limit and the mask
+            window; larger bright regions become several lights.
+        max_lights: size of the result (the brightest local maxima win when there are more).
+        max_candidates: cap on the samples kept after the neighbourhood filter
+            (default ``max(256, 8 max_lights)``).
+        weights: luminance weights (default Rec.709; see :func:`hdrjax.luminance_weights`).
+
+    Returns:
+        :class:`Lights`, sorted by energy.
+
+    Raises:
+        ValueError: bad shapes or options (at trace time, never from inside the kernel).
+    """
+    return _run(
+        envmap,
+        "envmap",
+        True,
+        threshold=threshold,
+        width=width,
+        n_samples=n_samples,
+        blur=blur,
+        max_radius=max_radius,
+        max_lights=max_lights,
+        max_candidates=max_candidates,
+        weights=weights,
+    )
+
+
+def detect_image(
+    image: Float[ArrayLike, "*batch H W 3"],
+    *,
+    width: int = DEFAULT_WIDTH,
+    n_samples: int | None = None,
+    threshold: float | Float[ArrayLike, "*batch"] | None = None,
+    blur: float = DEFAULT_BLUR,
+    max_radius: float | None = None,
+    max_lights: int = DEFAULT_MAX_LIGHTS,
+    max_candidates: int | None = None,
+    weights: Sequence[float] | None = None,
+) -> Lights:
+    """The same detection on a plain (flat) image: Halton samples on the plane, no seam.
+
+    Distances are in pixels, energy is ∑ L over pixels, and the result has no directions
+    (see :class:`Lights`). ``max_radius`` is in **working-resolution pixels** (default:
+    ``w / 12``, at least 4). Other arguments as :func:`detect`.
+    """
+    x = jnp.asarray(image)
+    w = min(x.shape[-2], int(width)) if x.ndim >= 3 else int(width)
+    return _run(
+        image,
+        "image",
+        False,
+        threshold=threshold,
+        width=width,
+        n_samples=n_samples,
+        blur=blur,
+        max_radius=float(max_radius) if max_radius is not None else max(4.0, w / 12.0),
+        max_lights=max_lights,
+        max_candidates=max_candidates,
+        weights=weights,
+    )
+
+
+__all__ = [
+    "DEFAULT_BLUR",
+    "DEFAULT_MAX_LIGHTS",
+    "DEFAULT_MAX_RADIUS",
+    "DEFAULT_SAMPLES_PER_PIXEL",
+    "DEFAULT_WIDTH",
+    "detect",
+    "detect_image",
+]
