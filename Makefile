@@ -21,7 +21,9 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reinhard.py
 	$(PY) benchmarks/bench_rgbe_read.py
+	$(PY) benchmarks/bench_filters.py
 	$(PY) benchmarks/bench_lights.py
+	$(PY) benchmarks/bench_vision.py
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check hdrjax tests benchmarks

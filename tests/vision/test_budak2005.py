@@ -91,7 +91,10 @@ def test_night_is_compressed_day_is_not_and_output_is_display_range():
     d = np.asarray(hv.perceptual_reproduction(day))
     for out in (n, d):
         assert out.dtype == np.float32 and (out >= 0).all() and (out <= 1).all()
-    spread = lambda x: np.log(x.mean(-1).max() / x.mean(-1).min())  # noqa: E731
+
+    def spread(x):
+        return np.log(x.mean(-1).max() / x.mean(-1).min())
+
     assert spread(n) < spread(d)
 
 

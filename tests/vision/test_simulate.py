@@ -167,7 +167,7 @@ def test_human_vision_jit_vmap_grad():
     nan = np.zeros(batched.shape, bool)
     nan[0, 3, 3, 0] = True
     assert np.isnan(batched[nan]).all() and np.isfinite(batched[~nan]).all()
-    g = jax.grad(lambda x: jnp.sum(jnp.nan_to_num(step(x))))(imgs[0])
+    g = jax.jit(jax.grad(lambda x: jnp.sum(jnp.nan_to_num(step(x)))))(imgs[0])
     assert np.isfinite(np.asarray(g)).all() and np.abs(np.asarray(g)).sum() > 0
 
 
@@ -294,3 +294,19 @@ def test_real_image_tree_in_absolute_units():
     kappa = np.asarray(hv.glare(ones, 40.0, variant=rep2.glare_variant, radius_deg=5.0))
     got = np.asarray(out, np.float64)
     np.testing.assert_allclose(got.sum(), (np.maximum(rgb, 0) * kappa).sum(), rtol=1e-4)
+
+
+# -- composition with every tone-mapping operator -----------------------------------------
+
+
+def test_composes_with_every_registered_operator():
+    import hdrjax
+
+    from ..operators.cases import EXTRA, natural
+
+    img = natural() * 0.05  # (12, 16) lognormal scene, as a dim interior in cd/m²
+    out, rep = hv.simulate(img, 10.0, ("acuity", "glare", "colour_loss"), scale=1.0)
+    assert out.shape == img.shape and out.dtype == np.float32
+    for name in hdrjax.operator_names():
+        shown = np.asarray(hdrjax.tonemap(out, name, **EXTRA.get(name, {})))
+        assert shown.shape == img.shape and np.isfinite(shown).all(), name

@@ -1,0 +1,214 @@
+"""Highlight desaturation (Birukov et al., GraphiCon 2022, section 4.2).
+
+Numeric contract: input is linear RGB ``(..., H, W, 3)``, scene-referred (relative or cd/m²)
+by default, before tone mapping; the output has the same shape and units. Per pixel, as in
+the paper:
+
+1. ``μ = (R + G + B) / 3``, the mean of the channels;
+2. ``d_c = c − μ`` for each channel;
+3. ``s = clip((L − T) / (L_max − T), 0, 1)``: 0 at and below the threshold ``T``, 1 at the
+   image's largest luminance ``L_max``, linear in between (``L`` is the pixel's luminance,
+   :func:`hdrjax.luminance`);
+4. ``c' = c − s · d_c``: each channel moves towards the mean, fully so at ``L_max``.
+
+Automatic threshold (the paper's final version): ``T = 2 · L₉₀``, where ``L₉₀`` is the
+luminance that only 10 % of the image's finite pixels exceed. It comes from
+:func:`hdrjax.stats.percentile`'s histogram (relative error at most ``rel_error_bound``,
+returned by :func:`highlight_threshold`; 0.25 % for a 30-stop image with the default 8192
+bins) or, with ``method="exact"``, from a sort. Manual mode takes ``T`` directly.
+
+Why before tone mapping (the default): the threshold and ``L_max`` are statistics of the
+physical luminances, as in the paper, where the step belongs to the HDR module. After a
+tone curve that clips, the brightest pixels all share the display maximum and the ramp
+between ``T`` and ``L_max`` collapses; hdrjax's operators scale RGB by ``L_d / L_w``, so
+the channel ratios set here survive tone mapping and the highlights come out white. The
+function is plain arithmetic on linear RGB and can also run on display-referred linear RGB.
+
+Differentiable in the image and in ``T`` (a manual threshold; the histogram percentile is a
+constant for ``jax.grad``, the exact one is differentiable). Leading axes are a batch: each
+image gets its own automatic threshold and maximum. Pixels with a NaN or infinite channel
+are returned unchanged and are left out of the statistics; when ``T ≥ L_max`` nothing
+changes.
+"""
+
+import functools
+from collections.abc import Sequence
+from typing import Literal
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+from .._colour import luminance
+from .._stats import DEFAULT_BINS, percentile
+from ..operators._base import as_float_image
+
+PERCENT_ABOVE = 10.0
+"""The automatic threshold doubles the luminance exceeded by this share of pixels (%)."""
+THRESHOLD_FACTOR = 2.0
+
+
+def _check_method(method: str, bins: int) -> None:
+    if method not in ("histogram", "exact"):
+        raise ValueError(f"method: expected 'histogram' or 'exact', got {method!r}")
+    if int(bins) < 2:
+        raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
+
+
+def _over_batch(fn, lead: int, *arrays):
+    """Apply a one-image function over ``lead`` leading batch axes."""
+    for _ in range(lead):
+        fn = jax.vmap(fn)
+    return fn(*arrays)
+
+
+def _counts(L: Array, finite: Array) -> tuple[Array, Array]:
+    """Finite and positive pixels, in one pass (a variadic reduction: on XLA:CPU two
+    reductions of masks read the image twice, at about twice the cost)."""
+
+    def combine(a, b):
+        return a[0] + b[0], a[1] + b[1]
+
+    ops = (
+        jnp.where(finite, 1, 0).reshape(-1),
+        jnp.where(finite & (L > 0), 1, 0).reshape(-1),
+    )
+    return jax.lax.reduce(ops, (jnp.int32(0), jnp.int32(0)), combine, (0,))
+
+
+def _threshold_one(L: Array, finite: Array, method: str, bins: int) -> tuple[Array, Array]:
+    """2 × the luminance exceeded by 10 % of the finite pixels of one image."""
+    n_finite, n_pos = _counts(jax.lax.stop_gradient(L), finite)
+    # percentile() ranks the positive pixels only. numpy.percentile's rank of the 90th
+    # percentile among all n finite pixels is 0.9 (n − 1); the n − n_pos non-positive ones
+    # come first, so among the positive ones it is rank_pos = n_pos − 1 − 0.1 (n − 1).
+    frac = 1.0 - PERCENT_ABOVE / 100.0
+    rank_pos = n_pos.astype(L.dtype) - 1 - (1 - frac) * (n_finite.astype(L.dtype) - 1)
+    q = 100.0 * jnp.clip(rank_pos / jnp.maximum(n_pos - 1, 1).astype(L.dtype), 0.0, 1.0)
+    value, err = percentile(L, q, method=method, bins=bins, where=finite)
+    # the 90th percentile lies among the non-positive pixels: the threshold is 0
+    value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
+    return THRESHOLD_FACTOR * value, err
+
+
+def highlight_threshold(
+    rgb: Float[ArrayLike, "*batch H W 3"],
+    *,
+    weights: Sequence[float] | None = None,
+    method: Literal["histogram", "exact"] = "histogram",
+    bins: int = DEFAULT_BINS,
+) -> tuple[Float[Array, "*batch"], Float[Array, "*batch"]]:
+    """The automatic desaturation threshold ``T = 2 · L₉₀`` of each image.
+
+    Args:
+        rgb: linear RGB, channels last; leading axes are a batch.
+        weights: luminance weights (Rec.709 by default).
+        method: ``"histogram"`` (fast, error-bounded) or ``"exact"`` (sort, differentiable).
+        bins: histogram bins over ``[ln min, ln max]`` of the positive luminances.
+
+    Returns:
+        ``(threshold, rel_error_bound)`` per image, in the image's luminance units; the bound
+        is on the relative error of ``L₉₀`` (0 for ``"exact"``).
+    """
+    x = as_float_image(rgb)
+    _check_method(method, bins)
+    w = None if weights is None else tuple(float(v) for v in weights)
+    return _threshold_impl(x, w, method, int(bins))
+
+
+@functools.partial(jax.jit, static_argnums=(1, 2, 3))
+def _threshold_impl(x, weights, method, bins):
+    finite = _finite_rgb(x)
+    L = luminance(jnp.where(finite[..., None], x, 0.0), weights)
+    return _over_batch(lambda l, f: _threshold_one(l, f, method, bins), x.ndim - 3, L, finite)
+
+
+def _finite_rgb(x: Array) -> Array:
+    # per-channel slices, not a reduction over the last axis: XLA:CPU fuses them
+    return jnp.isfinite(x[..., 0]) & jnp.isfinite(x[..., 1]) & jnp.isfinite(x[..., 2])
+
+
+def _desaturate_one(x: Array, T: Array, weights, method: str, bins: int) -> Array:
+    finite = _finite_rgb(x)
+    L = luminance(jnp.where(finite[..., None], x, 0.0), weights)
+    if T is None:
+        T, _ = _threshold_one(L, finite, method, bins)
+    L_max = jnp.max(jnp.where(finite, L, -jnp.inf))
+    span = L_max - T
+    ok = span > 0
+    s = jnp.where(ok, jnp.clip((L - T) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
+    safe = jnp.where(finite[..., None], x, 0.0)
+    mean = ((safe[..., 0] + safe[..., 1] + safe[..., 2]) / 3.0)[..., None]
+    out = safe - s[..., None] * (safe - mean)
+    return jnp.where(finite[..., None], out, x)
+
+
+def desaturate_highlights(
+    rgb: Float[ArrayLike, "*batch H W 3"],
+    threshold: Float[ArrayLike, "*batch"] | None = None,
+    *,
+    weights: Sequence[float] | None = None,
+    method: Literal["histogram", "exact"] = "histogram",
+    bins: int = DEFAULT_BINS,
+) -> Float[Array, "*batch H W 3"]:
+    """Move the channels of bright pixels towards their mean (see the module docstring).
+
+    Args:
+        rgb: linear RGB ``(..., H, W, 3)``, scene-referred by default; a batch is allowed.
+        threshold: ``T`` in the image's luminance units (manual mode; a scalar or one value
+            per image), or ``None`` for the automatic ``2 · L₉₀`` of each image.
+        weights: luminance weights (Rec.709 by default; pass the file's for other primaries).
+        method: how the automatic threshold's percentile is found (``"histogram"``/``"exact"``).
+        bins: histogram bins for ``method="histogram"``.
+
+    Returns:
+        Linear RGB of the same shape and units.
+
+    Example:
+        >>> import jax.numpy as jnp
+        >>> rgb = jnp.array([[[1.0, 1.0, 1.0], [4.0, 2.0, 0.0], [8.0, 4.0, 0.0]]])
+        >>> out = desaturate_highlights(rgb, threshold=2.0)
+        >>> [round(v, 4) for v in out[0, 2].tolist()]  # the brightest pixel becomes grey
+        [4.0, 4.0, 4.0]
+        >>> out[0, 0].tolist()  # below the threshold: unchanged
+        [1.0, 1.0, 1.0]
+    """
+    x = as_float_image(rgb)
+    _check_method(method, bins)
+    w = None if weights is None else tuple(float(v) for v in weights)
+    if threshold is None:
+        return _desaturate_auto(x, w, method, int(bins))
+    T = jnp.broadcast_to(jnp.asarray(threshold, x.dtype), x.shape[:-3])
+    return _desaturate_manual(x, T, w)
+
+
+@functools.partial(jax.jit, static_argnums=(1, 2, 3))
+def _desaturate_auto(x, weights, method, bins):
+    def one(img):
+        return _desaturate_one(img, None, weights, method, bins)
+
+    return _over_batch(one, x.ndim - 3, x)
+
+
+@functools.partial(jax.jit, static_argnums=(2,))
+def _desaturate_manual(x, T, weights):
+    def one(img, t):
+        return _desaturate_one(img, t, weights, "exact", 2)
+
+    return _over_batch(one, x.ndim - 3, x, T)
+
+
+class DesaturateHighlights(eqx.Module):
+    """:func:`desaturate_highlights` as a Module (``threshold=None``: automatic), so that it
+    composes with operators under ``jit``/``vmap``/``grad``; ``threshold`` is a parameter."""
+
+    threshold: Array | None = None
+    weights: tuple[float, ...] | None = eqx.field(static=True, default=None)
+    method: str = eqx.field(static=True, default="histogram")
+    bins: int = eqx.field(static=True, default=DEFAULT_BINS)
+
+    def __call__(self, rgb: Float[ArrayLike, "*batch H W 3"]) -> Float[Array, "*batch H W 3"]:
+        return desaturate_highlights(
+            rgb, self.threshold, weights=self.weights, method=self.method, bins=self.bins
+        )

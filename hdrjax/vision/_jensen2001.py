@@ -1,0 +1,91 @@
+"""Night blue shift of Jensen, Durand, Stark, Premoze, Dorsey & Shirley (2001).
+
+Reference: H. W. Jensen, F. Durand, M. M. Stark, S. Premože, J. Dorsey, P. Shirley,
+"A Physically-Based Night Sky Model", SIGGRAPH 2001, pp. 399–408,
+doi:10.1145/383259.383306; transcribed from brainwagon/knight ``src/tonemap.c``
+(formulas.md §3.7).
+
+Per pixel, with ``Y`` the luminance and ``V`` the scotopic luminance (cd/m²):
+
+- ``s = 3x² - 2x³`` with ``x = clamp((log10 Y + 2)/2.6, 0, 1)`` (0: rods only at or below
+  0.01 cd/m²; 1: cones only at or above 10^0.6 = 3.98 cd/m²);
+- chromaticity ``x' = (1-s)·0.25 + s·x``, ``y' = (1-s)·0.25 + s·y`` (the blue-shift white
+  is (0.25, 0.25));
+- luminance ``Y' = 0.4468 (1-s) V + s Y``;
+- XYZ rebuilt from ``(x', y', Y')`` and converted back to the image's RGB.
+"""
+
+import functools
+from collections.abc import Sequence
+
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+from ._ferwerda1996 import _log10_safe
+from ._photometry import (
+    _as_float,
+    _chroma_key,
+    check_rgb,
+    restore,
+    rgb_to_xyz,
+    sanitize,
+    scotopic_luminance,
+    xyz_to_rgb,
+)
+
+BLUE_WHITE = (0.25, 0.25)
+"""Chromaticity (x, y) towards which night vision shifts (Jensen et al. 2001)."""
+ROD_SCALE = 0.4468
+"""Scotopic-to-photopic luminance factor of the rod signal (Jensen et al. 2001)."""
+LOG_LOW, LOG_HIGH = -2.0, 0.6
+"""log10 luminance limits of the smoothstep (0.01 and 3.98 cd/m²)."""
+
+
+def blue_shift_weight(Y: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Jensen et al.'s photopic share ``s``: smoothstep of log10 Y from -2 to 0.6."""
+    Y = _as_float(Y)
+    x = jnp.clip((_log10_safe(Y, 10.0**LOG_LOW) - LOG_LOW) / (LOG_HIGH - LOG_LOW), 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def blue_shift(
+    rgb: Float[ArrayLike, "*batch 3"], *, chromaticities: Sequence[float] | None = None
+) -> Float[Array, "*batch 3"]:
+    """Night colour loss and blue shift, per pixel (Jensen et al. 2001).
+
+    Args:
+        rgb: linear RGB in cd/m², channels last, any leading shape.
+        chromaticities: the image's primaries (``None``: Rec.709/D65).
+
+    Returns:
+        RGB in cd/m²; non-finite pixels are returned unchanged. A pixel without a defined
+        chromaticity (X + Y + Z <= 0) takes the blue-shift white.
+    """
+    ch = _chroma_key(chromaticities)
+    return _blue_shift(check_rgb(rgb), ch)
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
+    x_, ok = sanitize(rgb)
+    X, Y, Z = rgb_to_xyz(x_, chromaticities)
+    V = scotopic_luminance(x_, chromaticities=chromaticities)
+    s = blue_shift_weight(Y)
+    tot = X + Y + Z
+    has = tot > 0
+    tot_s = jnp.where(has, tot, 1.0)
+    cx = jnp.where(has, X / tot_s, BLUE_WHITE[0])
+    cy = jnp.where(has, Y / tot_s, BLUE_WHITE[1])
+    cx = (1.0 - s) * BLUE_WHITE[0] + s * cx
+    cy = (1.0 - s) * BLUE_WHITE[1] + s * cy
+    Yn = ROD_SCALE * (1.0 - s) * V + s * Y
+    good = cy > 0  # false only for pixels with negative chromaticity (out-of-gamut noise)
+    cys = jnp.where(good, cy, 1.0)
+    Xn = jnp.where(good, cx * Yn / cys, X)
+    Zn = jnp.where(good, (1.0 - cx - cy) * Yn / cys, Z)
+    Yn = jnp.where(good, Yn, Y)
+    return restore(xyz_to_rgb(Xn, Yn, Zn, chromaticities), rgb, ok)
+
+
+__all__ = ["BLUE_WHITE", "ROD_SCALE", "blue_shift", "blue_shift_weight"]

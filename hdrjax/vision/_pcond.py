@@ -1,0 +1,180 @@
+"""Radiance ``pcond``'s human-vision formulas: contrast threshold, acuity, colour loss, veil.
+
+Reference: G. Ward Larson, H. Rushmeier, C. Piatko, "A Visibility Matching Tone Reproduction
+Operator for High Dynamic Range Scenes", IEEE TVCG 3(4), 1997, pp. 291–306,
+doi:10.1109/2945.646233; code: NREL/Radiance ``src/px/pcond.h``, ``pcond.c`` (v3.30),
+``pcond3.c``, ``pcond4.c``. Formulas as collected in formulas.md §3.3.
+
+Numeric contract: linear RGB and luminances in cd/m²; outputs in cd/m².
+"""
+
+import functools
+from collections.abc import Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._colour import luminance
+from . import _fft
+from ._ferwerda1996 import _log10_safe
+from ._fovea import block_mean, upsample
+from ._photometry import (
+    BOT_MESOPIC,
+    LMIN,
+    SWNORM,
+    TOP_MESOPIC,
+    _as_float,
+    _chroma_key,
+    check_rgb,
+    restore,
+    sanitize,
+    scotopic_luminance,
+    weights_of,
+)
+from ._view import ResolvedView, View, resolve_view
+
+VADAPT = 0.08
+"""Fraction of adaptation due to the veil (pcond4.c ``VADAPT``)."""
+VEIL_RANGE = 4.5
+"""pcond applies the veil only if the scene's ``ln`` range is at least this (about 90:1)."""
+
+
+def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Combined rod/cone threshold ``ΔL(L_a)`` in cd/m² (pcond3.c ``htcontrs``).
+
+    From Ferwerda et al. 1996: ``1.38e-3`` below ``L_a = 1.148e-4``; otherwise
+    ``10^y`` with ``x = log10 L_a`` and ``y = (0.405x + 1.6)^2.18 - 2.86`` for
+    ``x < -1.44``, ``x - 0.395`` for ``x < -0.0184``, ``(0.249x + 0.65)^2.7 - 0.72`` for
+    ``x < 1.9`` and ``x - 1.255`` above.
+
+    Example:
+        >>> round(float(tvi(1.0)), 4)  # cone branch at x = 0: 10**(0.65**2.7 - 0.72)
+        0.3913
+    """
+    L_a = _as_float(L_a)
+    x = _log10_safe(L_a, 1.148e-4)
+    rod = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
+    cone = (0.249 * jnp.clip(x, -0.0184, 1.9) + 0.65) ** 2.7 - 0.72
+    y = jnp.where(x < -1.44, rod, jnp.where(x < -0.0184, x - 0.395, cone))
+    y = jnp.where(x < 1.9, y, x - 1.255)
+    return jnp.where(L_a < 1.148e-4, 1.38e-3, 10.0**y)
+
+
+def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Highest resolvable spatial frequency, cycles/degree, at adaptation ``L_a`` (cd/m²).
+
+    ``R(L_a) = 17.25 atan(1.4 log10 L_a + 0.35) + 25.72`` (pcond ``hacuity``, a fit to
+    Shlaer 1937; formulas.md §3.3). ``L_a`` is clamped to pcond's ``LMIN`` = 1e-7 cd/m²,
+    where ``R`` = 0.45 c/deg (the fit itself reaches 0 at ``L_a`` ≈ 6e-10).
+
+    Example:
+        >>> round(float(acuity(1.0)), 2)
+        31.53
+    """
+    x = _log10_safe(_as_float(L_a), LMIN)
+    return 17.25 * jnp.arctan(1.4 * x + 0.35) + 25.72
+
+
+def mesopic_weight(L: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Share of colour vision at luminance ``L``: pcond3.c ``scotscan``'s ``incolor``.
+
+    ``c = (L - 5.62e-3)/(5.62 - 5.62e-3)`` clamped to [0, 1]: 0 (rods only) at or below
+    5.62e-3 cd/m², 1 (cones only) at or above 5.62 cd/m², linear in ``L`` between.
+    """
+    L = _as_float(L)
+    return jnp.clip((L - BOT_MESOPIC) / (TOP_MESOPIC - BOT_MESOPIC), 0.0, 1.0)
+
+
+def colour_loss(
+    rgb: Float[ArrayLike, "*batch 3"], *, chromaticities: Sequence[float] | None = None
+) -> Float[Array, "*batch 3"]:
+    """Mesopic/scotopic loss of colour vision, per pixel (pcond3.c ``scotscan``).
+
+    ``out = c·RGB + (1 - c)·(V / 2.26)·(1, 1, 1)`` with ``c`` = :func:`mesopic_weight` of the
+    pixel's luminance and ``V`` its :func:`scotopic_luminance` (``SWNORM`` = 2.26 is the
+    scotopic/photopic ratio of white). ``(1, 1, 1)`` is the image's white.
+
+    Args:
+        rgb: linear RGB in cd/m², channels last, any leading shape.
+        chromaticities: the image's primaries (``None``: Rec.709/D65).
+
+    Returns:
+        RGB in cd/m²; non-finite pixels are returned unchanged.
+    """
+    ch = _chroma_key(chromaticities)
+    return _colour_loss(check_rgb(rgb), ch)
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _colour_loss(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
+    x, ok = sanitize(rgb)
+    c = mesopic_weight(luminance(x, weights_of(chromaticities)))[..., None]
+    V = scotopic_luminance(x, chromaticities=chromaticities)[..., None]
+    return restore(c * x + (1.0 - c) * (V / SWNORM), rgb, ok)
+
+
+def veil_kernel(view: ResolvedView, fovea_shape: tuple[int, int]) -> np.ndarray:
+    """pcond's veil weights ``0.5 cosθ/(1 - cosθ)`` on the foveal grid (centre 0, θ < 90°).
+
+    θ is the angle between foveal sample centres, taken as the flat angular distance
+    ``sqrt((Δy·by·py)² + (Δx·bx·px)²)`` (pcond uses the view's exact ray directions; the two
+    agree at the centre of a perspective view). The kernel covers the whole foveal grid.
+    """
+    fy, fx = fovea_shape
+    by, bx = view.fovea_block
+    dy = np.arange(-(fy - 1), fy) * by * view.pixel_deg_y
+    dx = np.arange(-(fx - 1), fx) * bx * view.pixel_deg_x
+    theta = np.deg2rad(np.hypot(dy[:, None], dx[None, :]))
+    cos = np.cos(theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where((cos > 1e-6) & (theta > 0), 0.5 * cos / (1.0 - cos), 0.0)
+    return w
+
+
+def veil(
+    rgb: Float[ArrayLike, "H W 3"], view: "View | ResolvedView | float | None" = None
+) -> Float[Array, "H W 3"]:
+    """pcond's veiling luminance (pcond4.c ``compveil``/``addveil``).
+
+    For every foveal sample ``i``: ``veil_i = 0.08 Σ_j w_ij L_j / Σ_j w_ij`` over the other
+    foveal samples with ``w_ij = 0.5 cosθ_ij/(1 - cosθ_ij)`` (≈ cosθ/θ²); the veil image is
+    bilinearly interpolated to full resolution and ``out = 0.92·RGB + veil`` (per channel).
+    The convolution over the foveal grid is a zero-padded FFT (:func:`veil_kernel`).
+
+    Args:
+        rgb: linear RGB in cd/m², ``(H, W, 3)``.
+        view: field of view (:class:`View`, horizontal degrees, resolved, or ``None``).
+
+    Returns:
+        RGB in cd/m²; non-finite pixels are returned unchanged and do not contribute.
+    """
+    rgb = check_rgb(rgb, image=True)
+    return _veil(rgb, resolve_view(view, rgb.shape[0], rgb.shape[1]))
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _veil(rgb: Array, view: ResolvedView) -> Array:
+    x, ok = sanitize(rgb)
+    by, bx = view.fovea_block
+    fov, cnt = block_mean(x, ok, by, bx)
+    have = (cnt[..., :1] > 0).astype(x.dtype)
+    fy, fx = fov.shape[:2]
+    k = veil_kernel(view, (fy, fx))
+    size = _fft.fft_size(fy, fx, fy - 1, fx - 1)
+    spec = jnp.asarray(_fft.kernel_spectrum(k, size)).astype(
+        jnp.result_type(x.dtype, jnp.complex64)
+    )
+    num = _fft.convolve(fov * have, spec, size)
+    den = _fft.convolve(have, spec, size)
+    # den is a sum of positive weights or (no other sample: a 1-sample grid) FFT round-off;
+    # without a surround the sample keeps its own light (pcond would divide by zero).
+    okd = den > 1e-6 * float(k.max(initial=0.0))
+    v = jnp.where(okd, VADAPT * num / jnp.where(okd, den, 1.0), VADAPT * fov)
+    v = jnp.where(jnp.min(fov) >= 0, jnp.maximum(v, 0.0), v)  # FFT round-off below 0
+    full = upsample(v, (by, bx), rgb.shape[:2])
+    return restore((1.0 - VADAPT) * x + full, rgb, ok)
+
+
+__all__ = ["VADAPT", "VEIL_RANGE", "acuity", "colour_loss", "mesopic_weight", "tvi", "veil"]

@@ -1,0 +1,176 @@
+"""Photometric constants and colour conversions shared by the vision effects.
+
+Numeric contract: linear RGB in absolute units (cd/m²), channels last, any primaries given
+as an OpenEXR-style ``chromaticities`` 8-tuple (Rec.709/sRGB with D65 when ``None``).
+Luminance ``Y`` always comes from :func:`hdrjax.luminance` with the image's weights, so the
+RGB→XYZ matrix used here has exactly those weights as its Y row (its X and Z rows are
+colour-science's ``normalised_primary_matrix``); RGB→XYZ→RGB is an exact round trip.
+
+Constants are Radiance ``pcond``'s (G. Ward Larson, NREL/Radiance ``src/px/pcond.h``).
+"""
+
+import functools
+from collections.abc import Sequence
+
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._colour import REC709_CHROMATICITIES, luminance, luminance_weights
+
+LMIN = 1e-7
+"""Smallest visible world luminance, cd/m² (pcond.h ``LMIN``)."""
+LMAX = 1e5
+"""Largest visible world luminance, cd/m² (pcond.h ``LMAX``)."""
+BOT_MESOPIC = 5.62e-3
+"""Top of the scotopic range / bottom of the mesopic range, cd/m² (pcond.h ``BotMesopic``)."""
+TOP_MESOPIC = 5.62
+"""Top of the mesopic range / bottom of the photopic range, cd/m² (pcond.h ``TopMesopic``)."""
+SWNORM = 2.26
+"""Scotopic/photopic luminance ratio of white (pcond.h ``SWNORM``)."""
+
+
+def _as_float(x: ArrayLike) -> Array:
+    x = jnp.asarray(x)
+    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
+        x = x.astype(jnp.result_type(float))
+    return x
+
+
+def check_rgb(rgb: ArrayLike, name: str = "rgb", *, image: bool = False) -> Array:
+    """``rgb`` as a float array with 3 channels last (and 3 dims when ``image``)."""
+    rgb = _as_float(rgb)
+    if rgb.ndim < 1 or rgb.shape[-1] != 3:
+        raise ValueError(f"{name}: expected channels-last RGB (..., 3), got shape {rgb.shape}")
+    if image and rgb.ndim != 3:
+        raise ValueError(
+            f"{name}: expected one image of shape (H, W, 3), got shape {rgb.shape}; "
+            "use jax.vmap for batches"
+        )
+    if image and (rgb.shape[0] < 1 or rgb.shape[1] < 1):
+        raise ValueError(f"{name}: empty image of shape {rgb.shape}")
+    return rgb
+
+
+def _chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | None:
+    """Hashable, validated primaries: ``None`` for Rec.709/D65, else the 8 floats.
+
+    Raises:
+        ValueError: not 8 finite numbers, or degenerate primaries.
+    """
+    if chromaticities is None:
+        return None
+    c = np.asarray(chromaticities, dtype=np.float64).reshape(-1)
+    if c.shape == (8,) and np.allclose(c, REC709_CHROMATICITIES, atol=1e-4):
+        return None
+    key = tuple(float(v) for v in c)
+    _matrices(key)  # validates (luminance_weights raises ValueError)
+    return key
+
+
+def weights_of(key: tuple[float, ...] | None) -> tuple[float, float, float]:
+    """Luminance weights (the Y row of :func:`rgb_to_xyz_matrix`) of validated primaries."""
+    return tuple(float(w) for w in _matrices(key)[0][1])  # type: ignore[return-value]
+
+
+@functools.lru_cache(maxsize=16)
+def _matrices(key: tuple[float, ...] | None) -> tuple[np.ndarray, np.ndarray]:
+    weights = luminance_weights(key)  # validates the chromaticities
+    c = np.asarray(REC709_CHROMATICITIES if key is None else key, dtype=np.float64)
+    import colour  # slow import, only when a colour effect runs
+
+    npm = np.array(colour.normalised_primary_matrix(c[:6].reshape(3, 2), c[6:]), np.float64)
+    npm[1] = weights  # Y row = hdrjax's luminance weights (the standard's rounding for 709)
+    return npm, np.linalg.inv(npm)
+
+
+def rgb_to_xyz_matrix(chromaticities: Sequence[float] | None = None) -> np.ndarray:
+    """RGB→XYZ matrix (float64, 3×3) whose Y row is :func:`hdrjax.luminance_weights`."""
+    return _matrices(_chroma_key(chromaticities))[0].copy()
+
+
+def _apply3(m: np.ndarray, a: Array, b: Array, c: Array) -> tuple[Array, Array, Array]:
+    return tuple(  # type: ignore[return-value]
+        a * float(m[i, 0]) + b * float(m[i, 1]) + c * float(m[i, 2]) for i in range(3)
+    )
+
+
+def rgb_to_xyz(
+    rgb: Float[ArrayLike, "*batch 3"], chromaticities: Sequence[float] | None = None
+) -> tuple[Array, Array, Array]:
+    """CIE XYZ (cd/m² for Y) of linear RGB, as three arrays of shape ``rgb.shape[:-1]``."""
+    rgb = check_rgb(rgb)
+    m = _matrices(_chroma_key(chromaticities))[0]
+    X, _, Z = _apply3(m, rgb[..., 0], rgb[..., 1], rgb[..., 2])
+    Y = luminance(rgb, tuple(m[1]))
+    return X, Y, Z
+
+
+def xyz_to_rgb(
+    X: ArrayLike, Y: ArrayLike, Z: ArrayLike, chromaticities: Sequence[float] | None = None
+) -> Float[Array, "*batch 3"]:
+    """Inverse of :func:`rgb_to_xyz`: linear RGB, channels last."""
+    minv = _matrices(_chroma_key(chromaticities))[1]
+    r, g, b = _apply3(minv, jnp.asarray(X), jnp.asarray(Y), jnp.asarray(Z))
+    return jnp.stack([r, g, b], axis=-1)
+
+
+def scotopic_luminance(
+    rgb: Float[ArrayLike, "*batch 3"], *, chromaticities: Sequence[float] | None = None
+) -> Float[Array, "*batch"]:
+    """Scotopic luminance ``V`` (scotopic cd/m²) of linear RGB in cd/m².
+
+    ``V = Y (1.33 (1 + (Y + Z)/X) - 1.68)`` (Radiance ``cielum``, NREL/Radiance
+    ``src/px/pcond2.c``; HDR Toolbox ``lumScotopic.m``), evaluated on XYZ from the image's
+    primaries. Pixels with ``X <= 0`` (black, or out of gamut) and negative results give 0.
+    For an equal-energy white ``V/Y = 2.31``, close to pcond's ``SWNORM = 2.26``.
+
+    Args:
+        rgb: linear RGB, cd/m², channels last.
+        chromaticities: the image's primaries (``None``: Rec.709/D65).
+
+    Returns:
+        ``V`` with shape ``rgb.shape[:-1]``.
+    """
+    X, Y, Z = rgb_to_xyz(rgb, chromaticities)
+    ok = X > 0
+    Xs = jnp.where(ok, X, 1.0)
+    V = Y * (1.33 * (1.0 + (Y + Z) / Xs) - 1.68)
+    return jnp.where(ok, jnp.maximum(V, 0.0), 0.0)
+
+
+def finite_pixels(rgb: Array) -> Array:
+    """Boolean ``(..., )`` mask of pixels whose three channels are all finite."""
+    return jnp.all(jnp.isfinite(rgb), axis=-1)
+
+
+def sanitize(rgb: Array) -> tuple[Array, Array]:
+    """``(rgb with non-finite pixels set to 0, mask of finite pixels)``.
+
+    Effects compute on the sanitised image and :func:`restore` puts the original values back
+    in the non-finite pixels, so NaN/Inf never spread and their gradients are not NaN.
+    """
+    ok = finite_pixels(rgb)
+    return jnp.where(ok[..., None], rgb, 0.0), ok
+
+
+def restore(out: Array, rgb: Array, ok: Array) -> Array:
+    """Original values in the non-finite pixels (see :func:`sanitize`)."""
+    return jnp.where(ok[..., None], out, rgb)
+
+
+__all__ = [
+    "BOT_MESOPIC",
+    "LMAX",
+    "LMIN",
+    "SWNORM",
+    "TOP_MESOPIC",
+    "check_rgb",
+    "finite_pixels",
+    "restore",
+    "rgb_to_xyz",
+    "rgb_to_xyz_matrix",
+    "sanitize",
+    "scotopic_luminance",
+    "xyz_to_rgb",
+]
