@@ -67,8 +67,7 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .. import io as hio
-    from .. import measure as hm
+    from .. import io as hio, measure as hm
 
     if (args.a is None) != (args.b is None):
         raise UsageError("--from and --to go together")

@@ -14,8 +14,7 @@ single-physical-value criterion).
 """
 
 from ._mean import mean_filter as mean_filter
-from ._median import CRITERIA as CRITERIA
-from ._median import median_filter as median_filter
+from ._median import CRITERIA as CRITERIA, median_filter as median_filter
 from ._strips import MODES as MODES
 
 __all__ = ["CRITERIA", "MODES", "mean_filter", "median_filter"]

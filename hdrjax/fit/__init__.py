@@ -2,16 +2,8 @@
 
 from ._fit import (
     FitResult as FitResult,
-)
-from ._fit import (
     downscale as downscale,
-)
-from ._fit import (
     fit as fit,
-)
-from ._fit import (
     fit_batch as fit_batch,
-)
-from ._fit import (
     fit_sequence as fit_sequence,
 )

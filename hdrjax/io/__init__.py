@@ -7,13 +7,16 @@ with a file's content raise :class:`ReadError` (a ``ValueError``) whose one-line
 names the file.
 """
 
-from ..layers._errors import LayerShapeError as LayerShapeError
-from ..layers._errors import MissingLayerError as MissingLayerError
-from ..layers._errors import ReadError as ReadError
-from ._api import READ_FORMATS as READ_FORMATS
-from ._api import find_sidecars as find_sidecars
-from ._api import read as read
-from ._api import write as write
+from ..layers._errors import (
+    LayerShapeError as LayerShapeError,
+    MissingLayerError as MissingLayerError,
+    ReadError as ReadError,
+)
+from ._api import (
+    READ_FORMATS as READ_FORMATS,
+    find_sidecars as find_sidecars,
+    read as read,
+    write as write,
+)
 from ._atomic import atomic_path as atomic_path
-from ._display import DISPLAY_FORMATS as DISPLAY_FORMATS
-from ._display import write_display as write_display
+from ._display import DISPLAY_FORMATS as DISPLAY_FORMATS, write_display as write_display

@@ -10,29 +10,28 @@
   the up axis.
 """
 
-from ._cubemap import cubemap_equirect as cubemap_equirect
-from ._cubemap import detect_cubemap as detect_cubemap
+from ._cubemap import cubemap_equirect as cubemap_equirect, detect_cubemap as detect_cubemap
 from ._debevec2005 import median_cut as median_cut
-from ._geometry import CONVENTIONS as CONVENTIONS
-from ._geometry import angle_between as angle_between
-from ._geometry import azel_to_direction as azel_to_direction
-from ._geometry import azimuth_elevation as azimuth_elevation
-from ._geometry import convert_direction as convert_direction
-from ._geometry import direction_to_uv as direction_to_uv
-from ._geometry import to_y_up as to_y_up
-from ._geometry import to_z_up as to_z_up
-from ._geometry import uv_to_direction as uv_to_direction
-from ._loghin2019 import DEFAULT_BLUR as DEFAULT_BLUR
-from ._loghin2019 import DEFAULT_MAX_LIGHTS as DEFAULT_MAX_LIGHTS
-from ._loghin2019 import DEFAULT_MAX_RADIUS as DEFAULT_MAX_RADIUS
-from ._loghin2019 import DEFAULT_SAMPLES_PER_PIXEL as DEFAULT_SAMPLES_PER_PIXEL
-from ._loghin2019 import DEFAULT_WIDTH as DEFAULT_WIDTH
-from ._loghin2019 import detect as detect
-from ._loghin2019 import detect_image as detect_image
-from ._overlay import display_image as display_image
-from ._overlay import plot_lights as plot_lights
-from ._result import Lights as Lights
-from ._result import MedianCutLights as MedianCutLights
-from ._sequences import halton as halton
-from ._sequences import hammersley as hammersley
-from ._sequences import van_der_corput as van_der_corput
+from ._geometry import (
+    CONVENTIONS as CONVENTIONS,
+    angle_between as angle_between,
+    azel_to_direction as azel_to_direction,
+    azimuth_elevation as azimuth_elevation,
+    convert_direction as convert_direction,
+    direction_to_uv as direction_to_uv,
+    to_y_up as to_y_up,
+    to_z_up as to_z_up,
+    uv_to_direction as uv_to_direction,
+)
+from ._loghin2019 import (
+    DEFAULT_BLUR as DEFAULT_BLUR,
+    DEFAULT_MAX_LIGHTS as DEFAULT_MAX_LIGHTS,
+    DEFAULT_MAX_RADIUS as DEFAULT_MAX_RADIUS,
+    DEFAULT_SAMPLES_PER_PIXEL as DEFAULT_SAMPLES_PER_PIXEL,
+    DEFAULT_WIDTH as DEFAULT_WIDTH,
+    detect as detect,
+    detect_image as detect_image,
+)
+from ._overlay import display_image as display_image, plot_lights as plot_lights
+from ._result import Lights as Lights, MedianCutLights as MedianCutLights
+from ._sequences import halton as halton, hammersley as hammersley, van_der_corput as van_der_corput

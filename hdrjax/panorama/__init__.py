@@ -5,14 +5,16 @@ module doc of ``hdrjax.panorama._projections`` (Y up, looking along −Z, equire
 straight ahead, top row the zenith).
 """
 
-from ._projections import cubemap_directions as cubemap_directions
-from ._projections import cubemap_to_equirect as cubemap_to_equirect
-from ._projections import direction_to_equirect as direction_to_equirect
-from ._projections import equirect_directions as equirect_directions
-from ._projections import equirect_to_cubemap as equirect_to_cubemap
-from ._projections import equirect_to_fisheye as equirect_to_fisheye
-from ._projections import fisheye_directions as fisheye_directions
-from ._projections import fisheye_to_equirect as fisheye_to_equirect
-from ._projections import polar_to_cartesian as polar_to_cartesian
-from ._projections import sample_bilinear as sample_bilinear
-from ._projections import sample_equirect as sample_equirect
+from ._projections import (
+    cubemap_directions as cubemap_directions,
+    cubemap_to_equirect as cubemap_to_equirect,
+    direction_to_equirect as direction_to_equirect,
+    equirect_directions as equirect_directions,
+    equirect_to_cubemap as equirect_to_cubemap,
+    equirect_to_fisheye as equirect_to_fisheye,
+    fisheye_directions as fisheye_directions,
+    fisheye_to_equirect as fisheye_to_equirect,
+    polar_to_cartesian as polar_to_cartesian,
+    sample_bilinear as sample_bilinear,
+    sample_equirect as sample_equirect,
+)

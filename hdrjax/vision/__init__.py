@@ -19,111 +19,54 @@ cd/m² after ``contrast``; :class:`Budak2005` returns display values in [0, 1]).
   :func:`contrast_scale`, :func:`ward1994_scale`, :func:`fechner_brightness`.
 """
 
-from ._acuity import acuity_loss as acuity_loss
-from ._acuity import sample_spacing as sample_spacing
+from ._acuity import acuity_loss as acuity_loss, sample_spacing as sample_spacing
 from ._budak2005 import (
     AbstractContrastSpace as AbstractContrastSpace,
-)
-from ._budak2005 import (
     Budak2005 as Budak2005,
-)
-from ._budak2005 import (
     ConeOpponentSpace as ConeOpponentSpace,
-)
-from ._budak2005 import (
     fechner_brightness as fechner_brightness,
-)
-from ._budak2005 import (
     fechner_luminance as fechner_luminance,
-)
-from ._budak2005 import (
     perceptual_reproduction as perceptual_reproduction,
 )
 from ._contrast import (
     DISPLAY_MAX as DISPLAY_MAX,
-)
-from ._contrast import (
     DISPLAY_RANGE as DISPLAY_RANGE,
-)
-from ._contrast import (
     contrast as contrast,
-)
-from ._contrast import (
     contrast_scale as contrast_scale,
-)
-from ._contrast import (
     display_adaptation as display_adaptation,
-)
-from ._contrast import (
     ward1994_scale as ward1994_scale,
 )
-from ._ferwerda1996 import tvi_photopic as tvi_photopic
-from ._ferwerda1996 import tvi_scotopic as tvi_scotopic
-from ._jensen2001 import blue_shift as blue_shift
-from ._jensen2001 import blue_shift_weight as blue_shift_weight
+from ._ferwerda1996 import tvi_photopic as tvi_photopic, tvi_scotopic as tvi_scotopic
+from ._jensen2001 import blue_shift as blue_shift, blue_shift_weight as blue_shift_weight
 from ._pcond import (
     acuity as acuity,
-)
-from ._pcond import (
     colour_loss as colour_loss,
-)
-from ._pcond import (
     mesopic_weight as mesopic_weight,
-)
-from ._pcond import (
     tvi as tvi,
-)
-from ._pcond import (
     veil as veil,
 )
 from ._photometry import (
     BOT_MESOPIC as BOT_MESOPIC,
-)
-from ._photometry import (
     LMAX as LMAX,
-)
-from ._photometry import (
     LMIN as LMIN,
-)
-from ._photometry import (
     SWNORM as SWNORM,
-)
-from ._photometry import (
     TOP_MESOPIC as TOP_MESOPIC,
-)
-from ._photometry import (
     scotopic_luminance as scotopic_luminance,
 )
-from ._report import EFFECTS as EFFECTS
-from ._report import Decision as Decision
-from ._report import SceneReport as SceneReport
+from ._report import EFFECTS as EFFECTS, Decision as Decision, SceneReport as SceneReport
 from ._simulate import (
     HumanVision as HumanVision,
-)
-from ._simulate import (
     analyze as analyze,
-)
-from ._simulate import (
     simulate as simulate,
 )
 from ._spencer1995 import (
     WAVELENGTHS_RGB as WAVELENGTHS_RGB,
-)
-from ._spencer1995 import (
     WEIGHTS as SPENCER1995_WEIGHTS,
-)
-from ._spencer1995 import (
     glare as glare,
-)
-from ._spencer1995 import (
     glare_kernel as glare_kernel,
-)
-from ._spencer1995 import (
     spencer1995_psf as spencer1995_psf,
 )
-from ._view import DEFAULT_FOV as DEFAULT_FOV
-from ._view import ResolvedView as ResolvedView
-from ._view import View as View
+from ._view import DEFAULT_FOV as DEFAULT_FOV, ResolvedView as ResolvedView, View as View
 
 __all__ = [
     "BOT_MESOPIC",

@@ -5,8 +5,7 @@ import jax.numpy as jnp
 import matplotlib
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from hypothesis.extra import numpy as hnp
 
 from hdrjax.display import FalseColorScale, false_color, false_color_scale, render_figure
@@ -142,8 +141,7 @@ def test_any_values_give_colours_in_the_unit_cube(values, log):
 
 
 def test_cornell_box_luminance_in_false_colour():
-    from hdrjax import io as hio
-    from hdrjax import luminance
+    from hdrjax import io as hio, luminance
 
     img = hio.read(DATA / "cornell_box.exr")
     L = luminance(jnp.asarray(img.rgb()), img.luminance_weights)

@@ -8,8 +8,7 @@ import optimistix as optx
 import pytest
 
 import hdrjax
-from hdrjax import fit as hf
-from hdrjax import targets as ht
+from hdrjax import fit as hf, targets as ht
 
 from ..conftest import DATA, RTOL32
 

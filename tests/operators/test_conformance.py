@@ -55,7 +55,6 @@ def test_hard_cases_stay_finite(name, dtype, request):
     one = SINGLE_PIXEL.astype(dtype)
     _check_outputs(name, "single_pixel", one, np.asarray(op(one)))
     # +Inf luminance is white, -Inf black, a NaN channel makes the pixel NaN
-    bad = cases["nan_and_inf"]
     out = outs[-1]
     np.testing.assert_array_equal(out[1, 2], 1.0)
     np.testing.assert_array_equal(out[5, 5], 0.0)
@@ -152,8 +151,7 @@ CURVES = [n for n in NAMES if issubclass(hdrjax.get_operator(n), AbstractLuminan
 @pytest.mark.parametrize("name", CURVES)
 def test_global_curves_are_monotone_in_luminance(name):
     """hypothesis: for every global luminance curve, brighter grey pixels never get darker."""
-    from hypothesis import given, settings
-    from hypothesis import strategies as st
+    from hypothesis import given, settings, strategies as st
 
     op = eqx.filter_jit(lambda o, x: o.measure(x))(make(name), natural())
     f = jax.jit(lambda o, x: o(x))

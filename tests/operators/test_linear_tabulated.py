@@ -5,8 +5,7 @@ import json
 import numpy as np
 import pytest
 from colour_hdri.exposure import dsc as cx
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from scipy.interpolate import PchipInterpolator
 
 import hdrjax

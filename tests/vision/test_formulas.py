@@ -9,8 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 import hdrjax.vision as hv
 from hdrjax.vision._photometry import rgb_to_xyz_matrix
