@@ -132,7 +132,8 @@ def percentile(
         raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
     L = _float(L)
     qs = jnp.asarray(q, dtype=L.dtype) / 100.0
-    valid = jnp.isfinite(L) & (L > 0)
+    # "positive" means at least the smallest normal float: XLA:CPU flushes subnormals
+    valid = jnp.isfinite(L) & (L >= jnp.finfo(L.dtype).tiny)
     if where is not None:
         valid = valid & jnp.broadcast_to(jnp.asarray(where, bool), L.shape)
     n = jnp.sum(valid)
@@ -190,7 +191,7 @@ def measure(
         Lz = jnp.where(finite, L, 0.0)
         finf = finite.astype(dt)
         n_finite = accurate_sum(finf)
-    posf = (Lz > 0).astype(dt)
+    posf = (Lz >= jnp.finfo(dt).tiny).astype(dt)  # subnormals are flushed to 0 on CPU
     n_pix = jnp.asarray(L.size, jnp.int32)
     n_pos = accurate_sum(posf)
     any_finite = n_finite > 0

@@ -3,10 +3,7 @@
 import argparse
 import os
 
-from ._cmd_filter import read_image
-from ._common import DataError, UsageError, positive_float
-
-HDR_EXT = (".exr", ".hdr", ".pfm")
+from ._common import HDR_EXT, DataError, UsageError, positive_float, read_image
 
 
 def register(subparsers) -> None:

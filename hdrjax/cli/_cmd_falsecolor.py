@@ -3,8 +3,7 @@
 import argparse
 import os
 
-from ._cmd_filter import read_image
-from ._common import DataError, UsageError, value_range
+from ._common import DataError, UsageError, read_image, value_range
 
 DISPLAY_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 FIGURE_EXT = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")

@@ -3,22 +3,7 @@
 import argparse
 import os
 
-from ._common import DataError, UsageError
-
-HDR_EXT = (".exr", ".hdr", ".pfm")
-
-
-def read_image(path: str):
-    """``hdrjax.io.read(path)``; a missing or unreadable file → DataError naming it."""
-    from .. import io as hio
-
-    if not os.path.exists(path):
-        raise DataError(f"{path}: no such file")
-    try:
-        return hio.read(path)
-    except (ValueError, OSError) as e:
-        msg = str(e)
-        raise DataError(msg if os.path.basename(path) in msg else f"{path}: {msg}") from None
+from ._common import HDR_EXT, DataError, UsageError, read_image
 
 
 def _odd(text: str) -> int:

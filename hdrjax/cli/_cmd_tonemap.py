@@ -4,10 +4,7 @@ import argparse
 import os
 import time
 
-from ._common import DataError, UsageError, positive_float
-
-LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
-HDR_EXT = (".exr", ".hdr", ".pfm")
+from ._common import HDR_EXT, LDR_EXT, DataError, UsageError, positive_float, read_image
 
 # command-line option -> operator parameter, and the operators that accept it
 OPTION_PARAMS = {
@@ -117,14 +114,10 @@ def load_rgb(path: str, scale: float = 1.0):
     """Read an HDR file as float32 RGB with its luminance weights; errors → DataError."""
     import numpy as np
 
-    from .. import io as hio
-
-    if not os.path.exists(path):
-        raise DataError(f"{path}: no such file")
+    img = read_image(path)
     try:
-        img = hio.read(path)
         rgb = img.rgb()
-    except (ValueError, OSError) as e:
+    except ValueError as e:
         raise DataError(str(e) if os.path.basename(path) in str(e) else f"{path}: {e}") from None
     if scale != 1.0:
         rgb = rgb * np.float32(scale)

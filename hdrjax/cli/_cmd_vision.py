@@ -5,10 +5,7 @@ import json
 import os
 import time
 
-from ._common import DataError, UsageError, positive_float
-
-LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
-HDR_EXT = (".exr", ".hdr", ".pfm")
+from ._common import HDR_EXT, LDR_EXT, DataError, UsageError, positive_float, read_image
 
 
 def register(subparsers) -> None:
@@ -137,14 +134,6 @@ def vision_effects() -> tuple[str, ...]:
     from ..vision import EFFECTS
 
     return EFFECTS
-
-
-def read_image(path: str):
-    """The layered image behind ``path``; unreadable files → DataError."""
-    from ._cmd_tonemap import load_rgb
-
-    img, _ = load_rgb(path)
-    return img
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,6 +1,12 @@
 """Shared pieces of the command line: error types and argument parsers."""
 
 import argparse
+import os
+
+LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
+"""Display-referred outputs (encoded, 8/16-bit)."""
+HDR_EXT = (".exr", ".hdr", ".pfm")
+"""Scene- or display-referred linear float files."""
 
 
 class CLIError(Exception):
@@ -41,3 +47,16 @@ def value_range(text: str) -> tuple[float, float]:
     if not lo < hi:
         raise argparse.ArgumentTypeError(f"expected LO < HI, got {text!r}")
     return lo, hi
+
+
+def read_image(path: str):
+    """``hdrjax.io.read(path)``; a missing or unreadable file → DataError naming it."""
+    from .. import io as hio
+
+    if not os.path.exists(path):
+        raise DataError(f"{path}: no such file")
+    try:
+        return hio.read(path)
+    except (ValueError, OSError) as e:
+        msg = str(e)
+        raise DataError(msg if os.path.basename(path) in msg else f"{path}: {msg}") from None

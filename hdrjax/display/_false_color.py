@@ -279,7 +279,8 @@ def _data_range(v: Array, log: bool, percentiles) -> tuple[Array, Array]:
         (lo, hi), _ = percentile(v, jnp.asarray(percentiles, jnp.float32))
         return lo, hi
     finite = jnp.isfinite(v)
-    use = finite & (v > 0) if log else finite
+    # subnormals count as 0: XLA:CPU flushes them, so their logs would be -inf
+    use = finite & (v >= jnp.finfo(v.dtype).tiny) if log else finite
     return jnp.min(jnp.where(use, v, jnp.inf)), jnp.max(jnp.where(use, v, -jnp.inf))
 
 
