@@ -13,6 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
+	mkdir -p out
 	$(VENV)/bin/hdrjax tonemap data/cornell_box.exr -o out/cornell_box.png --method reinhard2002 --verbose
 
 test: $(STAMP)

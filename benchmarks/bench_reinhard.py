@@ -37,8 +37,9 @@ def numpy_reinhard_auto(rgb: np.ndarray) -> np.ndarray:
     pos = L[L > 0]
     l1, l99 = np.percentile(pos, [1, 99])
     lbar_t = np.exp(np.mean(np.log(pos[pos <= l99])))
-    key = 0.18 * 4 ** ((2 * np.log2(lbar_t) - np.log2(l1) - np.log2(l99))
-                       / (np.log2(l99) - np.log2(l1)))
+    key = 0.18 * 4 ** (
+        (2 * np.log2(lbar_t) - np.log2(l1) - np.log2(l99)) / (np.log2(l99) - np.log2(l1))
+    )
     lbar = np.exp(np.mean(np.log(np.float32(1e-6) + np.maximum(L, 0))))
     zones = np.log2(pos.max()) - np.log2(pos.min())
     white = 1.5 * 2 ** (zones - 5)
@@ -99,21 +100,30 @@ def main() -> None:
     c_don = time.perf_counter() - t0
     bufs = [jax.device_put(rgb) for _ in range(args.repeats + 1)]
     it = iter(bufs)
-    record("hdrjax reinhard2002 auto (donated input)",
-           lambda: donated(next(it)).block_until_ready(), compile_s=c_don)
+    record(
+        "hdrjax reinhard2002 auto (donated input)",
+        lambda: donated(next(it)).block_until_ready(),
+        compile_s=c_don,
+    )
 
     measure = jax.jit(lambda img: op.measure(img))
     t0 = time.perf_counter()
     measure.lower(x).compile()
     c_meas = time.perf_counter() - t0
-    record("hdrjax statistics only (JGT key, white)",
-           lambda: jax.block_until_ready(measure(x)), compile_s=c_meas)
+    record(
+        "hdrjax statistics only (JGT key, white)",
+        lambda: jax.block_until_ready(measure(x)),
+        compile_s=c_meas,
+    )
 
     exact = Reinhard2002(percentile_method="exact")
     if n <= 1024:
         ex = jax.jit(lambda img: exact(img))
-        record("hdrjax reinhard2002 auto, exact percentiles",
-               lambda: ex(x).block_until_ready(), repeats=3)
+        record(
+            "hdrjax reinhard2002 auto, exact percentiles",
+            lambda: ex(x).block_until_ready(),
+            repeats=3,
+        )
 
     if not args.skip_peers:
         record("NumPy float32 (same operator)", lambda: numpy_reinhard_auto(rgb), repeats=3)
@@ -127,8 +137,11 @@ def main() -> None:
         try:
             from colour_hdri import tonemapping_operator_Reinhard2004
 
-            record("colour-hdri Reinhard2004", lambda: tonemapping_operator_Reinhard2004(rgb),
-                   repeats=3)
+            record(
+                "colour-hdri Reinhard2004",
+                lambda: tonemapping_operator_Reinhard2004(rgb),
+                repeats=3,
+            )
         except ImportError:
             print("colour-hdri not installed: skipped")
 

@@ -17,10 +17,14 @@ def register(subparsers) -> None:
         "each operator would estimate from it.",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr or .pfm")
-    p.add_argument("--scale", type=positive_float, default=1.0,
-                   help="multiply the input by this factor first")
-    p.add_argument("--exact", action="store_true",
-                   help="exact (sorted) percentiles instead of the histogram estimate")
+    p.add_argument(
+        "--scale", type=positive_float, default=1.0, help="multiply the input by this factor first"
+    )
+    p.add_argument(
+        "--exact",
+        action="store_true",
+        help="exact (sorted) percentiles instead of the histogram estimate",
+    )
     p.set_defaults(func=run)
 
 
@@ -55,15 +59,23 @@ def run(args: argparse.Namespace) -> int:
     ps, err = jax.jit(lambda x: percentile(x, qs, method=method))(L)
     n_bad = int(st.n_nonfinite)
     print("luminance (finite pixels):")
-    print(f"  min {float(st.min):.6g}   min>0 {float(st.min_positive):.6g}"
-          f"   max {float(st.max):.6g}")
+    print(
+        f"  min {float(st.min):.6g}   min>0 {float(st.min_positive):.6g}   max {float(st.max):.6g}"
+    )
     names = ("p1", "p5", "median", "p95", "p99")
-    print("  " + "   ".join(f"{n} {float(v):.6g}" for n, v in zip(names, ps, strict=True))
-          + (f"   (histogram, rel. error <= {float(err):.2g})" if method == "histogram" else ""))
-    print(f"  log-average {float(st.log_average):.6g}   dynamic range"
-          f" {float(st.dynamic_range_stops):.2f} stops")
-    print(f"  non-positive pixels {int(st.n_pixels - st.n_positive - st.n_nonfinite)},"
-          f" NaN/Inf pixels {n_bad}")
+    print(
+        "  "
+        + "   ".join(f"{n} {float(v):.6g}" for n, v in zip(names, ps, strict=True))
+        + (f"   (histogram, rel. error <= {float(err):.2g})" if method == "histogram" else "")
+    )
+    print(
+        f"  log-average {float(st.log_average):.6g}   dynamic range"
+        f" {float(st.dynamic_range_stops):.2f} stops"
+    )
+    print(
+        f"  non-positive pixels {int(st.n_pixels - st.n_positive - st.n_nonfinite)},"
+        f" NaN/Inf pixels {n_bad}"
+    )
     print("estimated parameters:")
     for name in ESTIMATING:
         op = get_operator(name)()
@@ -77,7 +89,9 @@ def run(args: argparse.Namespace) -> int:
     from ..operators._base import prepare
 
     use_local = bool(jax.jit(lambda x: auto.use_local(prepare(x, wts)))(jnp.asarray(rgb)))
-    print(f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
-          f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)")
+    print(
+        f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
+        f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)"
+    )
     print("operators: " + ", ".join(operator_names()))
     return 0

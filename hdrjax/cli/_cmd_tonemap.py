@@ -28,29 +28,59 @@ def register(subparsers) -> None:
         "(Reinhard 2002 JGT key and white point, log-average adaptation luminance).",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
-    p.add_argument("-o", "--output", required=True,
-                   help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
-                   "(display-referred linear)")
-    p.add_argument("--method", default="reinhard2002",
-                   help="operator name (see `hdrjax info`; default reinhard2002)")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
+        "(display-referred linear)",
+    )
+    p.add_argument(
+        "--method",
+        default="reinhard2002",
+        help="operator name (see `hdrjax info`; default reinhard2002)",
+    )
     p.add_argument("--key", type=positive_float, help="Reinhard key a (default: JGT estimate)")
-    p.add_argument("--white", type=positive_float,
-                   help="L_white (Reinhard: scaled units; tumblin_reinhard: display units)")
-    p.add_argument("--L-wa", dest="L_wa", type=positive_float,
-                   help="world adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)")
-    p.add_argument("--L-max", dest="L_max", type=positive_float,
-                   help="luminance mapped to white / not clipped (linear, tumblin_reinhard)")
-    p.add_argument("--L-da", dest="L_da", type=positive_float,
-                   help="display adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)")
+    p.add_argument(
+        "--white",
+        type=positive_float,
+        help="L_white (Reinhard: scaled units; tumblin_reinhard: display units)",
+    )
+    p.add_argument(
+        "--L-wa",
+        dest="L_wa",
+        type=positive_float,
+        help="world adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)",
+    )
+    p.add_argument(
+        "--L-max",
+        dest="L_max",
+        type=positive_float,
+        help="luminance mapped to white / not clipped (linear, tumblin_reinhard)",
+    )
+    p.add_argument(
+        "--L-da",
+        dest="L_da",
+        type=positive_float,
+        help="display adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)",
+    )
     p.add_argument("--exposure-time", type=positive_float, help="seconds (linear)")
     p.add_argument("--f-number", type=positive_float, help="aperture N (linear)")
     p.add_argument("--iso", type=positive_float, help="ISO speed S (linear)")
     p.add_argument("--ev100", type=float, help="exposure value at ISO 100 (linear)")
     p.add_argument("--table", help="CSV/JSON table for --method tabulated")
-    p.add_argument("--scale", type=positive_float, default=1.0,
-                   help="multiply the input by this factor first (e.g. to cd/m²)")
-    p.add_argument("--transfer", choices=("srgb", "gamma", "linear"), default="srgb",
-                   help="display encoding for .png/.jpg/.tif (default srgb)")
+    p.add_argument(
+        "--scale",
+        type=positive_float,
+        default=1.0,
+        help="multiply the input by this factor first (e.g. to cd/m²)",
+    )
+    p.add_argument(
+        "--transfer",
+        choices=("srgb", "gamma", "linear"),
+        default="srgb",
+        help="display encoding for .png/.jpg/.tif (default srgb)",
+    )
     p.add_argument("--gamma", type=positive_float, default=2.2, help="for --transfer gamma")
     p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
     p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
@@ -173,8 +203,9 @@ def run(args: argparse.Namespace) -> int:
     print(describe(measured, op.unset(), op.parameters()))
     print(f"wrote: {args.output}")
     if args.verbose:
-        print(f"time: read {t_read:.3f}s, tone map {t_map:.3f}s (incl. compile),"
-              f" write {t_write:.3f}s")
+        print(
+            f"time: read {t_read:.3f}s, tone map {t_map:.3f}s (incl. compile), write {t_write:.3f}s"
+        )
     return 0
 
 

@@ -39,8 +39,12 @@ EPSILON = float(jnp.finfo(jnp.float64).eps)
 def _set(op, **values):
     """Copy of ``op`` with the given ``None`` fields replaced."""
     names = tuple(values)
-    return eqx.tree_at(lambda o: tuple(getattr(o, n) for n in names), op,
-                       tuple(values[n] for n in names), is_leaf=lambda x: x is None)
+    return eqx.tree_at(
+        lambda o: tuple(getattr(o, n) for n in names),
+        op,
+        tuple(values[n] for n in names),
+        is_leaf=lambda x: x is None,
+    )
 
 
 class _MaxNormalised(AbstractLuminanceCurve):
@@ -261,8 +265,14 @@ class Filmic(AbstractOperator):
         return self
 
     def _apply(self, p: Prepared) -> Array:
-        k = (self.shoulder_strength, self.linear_strength, self.linear_angle,
-             self.toe_strength, self.toe_numerator, self.toe_denominator)
+        k = (
+            self.shoulder_strength,
+            self.linear_strength,
+            self.linear_angle,
+            self.toe_strength,
+            self.toe_numerator,
+            self.toe_denominator,
+        )
         out = hable(jnp.maximum(p.rgb, 0.0) * self.exposure_bias, *k)
         return out / hable(self.linear_whitepoint, *k)
 

@@ -91,9 +91,7 @@ class Reinhard2002(AbstractLuminanceCurve):
     L_white: Array | None = eqx.field(default=None, converter=param)
     log_average: Array | None = eqx.field(default=None, converter=param)
     delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(
-        static=True, default="histogram"
-    )
+    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
     bins: int = eqx.field(static=True, default=DEFAULT_BINS)
     weights: tuple[float, float, float] = weights_field()
 
@@ -106,8 +104,9 @@ class Reinhard2002(AbstractLuminanceCurve):
         white = self.L_white
         if white is None:
             white = jgt_white(st, key / lbar)
-        return Reinhard2002(key, white, lbar, self.delta, self.percentile_method, self.bins,
-                            self.weights)
+        return Reinhard2002(
+            key, white, lbar, self.delta, self.percentile_method, self.bins, self.weights
+        )
 
     def _curve(self, L: Array) -> Array:
         assert self.key is not None and self.L_white is not None

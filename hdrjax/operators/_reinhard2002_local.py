@@ -114,9 +114,7 @@ class Reinhard2002Local(AbstractOperator):
     s_high: float = eqx.field(static=True, default=43.0)
     num: int = eqx.field(static=True, default=8)
     delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(
-        static=True, default="histogram"
-    )
+    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
     bins: int = eqx.field(static=True, default=DEFAULT_BINS)
     weights: tuple[float, float, float] = weights_field()
 
@@ -133,16 +131,22 @@ class Reinhard2002Local(AbstractOperator):
         st = stats_of(p, method=self.percentile_method, bins=self.bins)
         key = jgt_key(st) if self.key is None else self.key
         lbar = st.log_average if self.log_average is None else self.log_average
-        return eqx.tree_at(lambda o: (o.key, o.log_average), self, (key, lbar),
-                           is_leaf=lambda x: x is None)
+        return eqx.tree_at(
+            lambda o: (o.key, o.log_average), self, (key, lbar), is_leaf=lambda x: x is None
+        )
 
     def _apply(self, p: Prepared) -> Array:
         assert self.key is not None and self.log_average is not None
         scale = self.key / self.log_average
         valid = p.valid()
-        V1m = local_adaptation(scale * jnp.maximum(p.L, 0.0), valid, self.key, phi=self.phi,
-                               epsilon=self.epsilon, ss=scales(self.s_low, self.s_high,
-                                                               self.num))
+        V1m = local_adaptation(
+            scale * jnp.maximum(p.L, 0.0),
+            valid,
+            self.key,
+            phi=self.phi,
+            epsilon=self.epsilon,
+            ss=scales(self.s_low, self.s_high, self.num),
+        )
         # L_d / L_w = scale / (1 + V1_m): no division by the pixel's own luminance
         ratio = jnp.where(p.L > 0, scale / (1.0 + V1m), 0.0)
         return p.rgb * ratio[..., None]
@@ -163,9 +167,7 @@ class Reinhard2002Auto(AbstractOperator):
     phi: float = eqx.field(static=True, default=8.0)
     epsilon: float = eqx.field(static=True, default=0.05)
     delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(
-        static=True, default="histogram"
-    )
+    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
     bins: int = eqx.field(static=True, default=DEFAULT_BINS)
     weights: tuple[float, float, float] = weights_field()
 
@@ -177,9 +179,14 @@ class Reinhard2002Auto(AbstractOperator):
         return (st.n_positive > 0) & (st.dynamic_range_stops > self.zones)
 
     def _apply(self, p: Prepared) -> Array:
-        common = dict(key=self.key, log_average=self.log_average, delta=self.delta,
-                      percentile_method=self.percentile_method, bins=self.bins,
-                      weights=self.weights)
+        common = dict(
+            key=self.key,
+            log_average=self.log_average,
+            delta=self.delta,
+            percentile_method=self.percentile_method,
+            bins=self.bins,
+            weights=self.weights,
+        )
         local = Reinhard2002Local(phi=self.phi, epsilon=self.epsilon, **common)
         glob = Reinhard2002(L_white=self.L_white, **common)
         return jax.lax.cond(

@@ -41,9 +41,7 @@ def validate_table(luminance: ArrayLike, display: ArrayLike, source: str = "tabl
     if lum.size == 0:
         raise ValueError(f"{source}: the table is empty; expected at least 2 rows")
     if lum.shape != dis.shape:
-        raise ValueError(
-            f"{source}: {lum.size} luminance values but {dis.size} display values"
-        )
+        raise ValueError(f"{source}: {lum.size} luminance values but {dis.size} display values")
     if lum.size < 2:
         raise ValueError(f"{source}: expected at least 2 rows, got {lum.size}")
     if not (np.all(np.isfinite(lum)) and np.all(np.isfinite(dis))):
@@ -82,26 +80,21 @@ def pchip_slopes(x: Array, y: Array) -> Array:
     def edge(h0, h1, m0, m1):
         e = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
         e = jnp.where(jnp.sign(e) != jnp.sign(m0), 0.0, e)
-        return jnp.where(
-            (jnp.sign(m0) != jnp.sign(m1)) & (jnp.abs(e) > jnp.abs(3 * m0)), 3 * m0, e
-        )
+        return jnp.where((jnp.sign(m0) != jnp.sign(m1)) & (jnp.abs(e) > jnp.abs(3 * m0)), 3 * m0, e)
 
     first = edge(h[0], h[1], d[0], d[1])
     last = edge(h[-1], h[-2], d[-1], d[-2])
     return jnp.concatenate([first[None], inner, last[None]])
 
 
-def interpolate(
-    L: Array, luminance: Array, display: Array, method: str = "pchip"
-) -> Array:
+def interpolate(L: Array, luminance: Array, display: Array, method: str = "pchip") -> Array:
     """Display value of world luminance ``L ≥ 0`` from the table (see module docstring)."""
     x = jnp.log10(luminance)
     y = display
     pos = L > 0
     t = jnp.log10(jnp.where(pos, L, luminance[0]))
     tc = jnp.clip(t, x[0], x[-1])
-    k = jnp.clip(jnp.searchsorted(x, tc, side="right", method="compare_all") - 1,
-                 0, x.shape[0] - 2)
+    k = jnp.clip(jnp.searchsorted(x, tc, side="right", method="compare_all") - 1, 0, x.shape[0] - 2)
     x0, x1, y0, y1 = x[k], x[k + 1], y[k], y[k + 1]
     h = x1 - x0
     s = (tc - x0) / h
@@ -111,8 +104,12 @@ def interpolate(
         m = pchip_slopes(x, y)
         m0, m1 = m[k], m[k + 1]
         s2, s3 = s * s, s * s * s
-        v = ((2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * m0
-             + (-2 * s3 + 3 * s2) * y1 + (s3 - s2) * h * m1)
+        v = (
+            (2 * s3 - 3 * s2 + 1) * y0
+            + (s3 - 2 * s2 + s) * h * m0
+            + (-2 * s3 + 3 * s2) * y1
+            + (s3 - s2) * h * m1
+        )
     below = L < luminance[0]
     ramp = y[0] * jnp.maximum(L, 0.0) / luminance[0]
     return jnp.where(below, ramp, v)
@@ -201,7 +198,7 @@ def parse_table(text: str, name: str, *, json_format: bool) -> tuple[np.ndarray,
             return np.asarray(lum, np.float64), np.asarray(dis, np.float64)
         except (ValueError, KeyError, TypeError) as e:
             raise ValueError(
-                f"{name}: expected JSON {{\"luminance\": [...], \"display\": [...]}}"
+                f'{name}: expected JSON {{"luminance": [...], "display": [...]}}'
                 f" or a list of [luminance, display] pairs ({e})"
             ) from None
     lum, dis = [], []

@@ -26,14 +26,13 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from ._base import (
-    AbstractOperator,
+    AbstractLuminanceCurve,
     Prepared,
     log_average,
     max_luminance,
     param,
     register,
     safe_log,
-    scale_by_luminance,
     stats_of,
     weights_field,
 )
@@ -78,8 +77,25 @@ def adaptation_luminance(p: Prepared, method: str, bins: int) -> Array:
 _ADAPT = ("log_average", "trimmed")
 
 
+class _AbstractTumblin(AbstractLuminanceCurve):
+    """Settings shared by the two Tumblin–Rushmeier operators (display side and estimation)."""
+
+    L_da: Array = eqx.field(default=20.0, converter=param)
+    C_max: Array = eqx.field(default=100.0, converter=param)
+    adaptation: Literal["log_average", "trimmed"] = eqx.field(static=True, default="log_average")
+    gamma_log: Literal["ln", "log10"] = eqx.field(static=True, default="ln")
+    bins: int = eqx.field(static=True, default=8192)
+    weights: tuple[float, float, float] = weights_field()
+
+    def __check_init__(self):
+        if self.adaptation not in _ADAPT:
+            raise ValueError(f"adaptation: expected one of {_ADAPT}, got {self.adaptation!r}")
+        if self.gamma_log not in ("ln", "log10"):
+            raise ValueError(f"gamma_log: expected 'ln' or 'log10', got {self.gamma_log!r}")
+
+
 @register("tumblin1999")
-class Tumblin1999(AbstractOperator):
+class Tumblin1999(_AbstractTumblin):
     """Revised Tumblin–Rushmeier operator, formula 1 only, display value ``L_d / L_max``.
 
     Same function as colour-hdri's ``tonemapping_operator_Tumblin1999`` (its ``L_max`` is
@@ -93,18 +109,8 @@ class Tumblin1999(AbstractOperator):
         L_wa: world adaptation luminance, cd/m²; ``None`` → measured (``adaptation``).
     """
 
-    L_da: Array = eqx.field(default=20.0, converter=param)
-    C_max: Array = eqx.field(default=100.0, converter=param)
     L_max: Array = eqx.field(default=100.0, converter=param)
     L_wa: Array | None = eqx.field(default=None, converter=param)
-    adaptation: Literal["log_average", "trimmed"] = eqx.field(static=True, default="log_average")
-    gamma_log: Literal["ln", "log10"] = eqx.field(static=True, default="ln")
-    bins: int = eqx.field(static=True, default=8192)
-    weights: tuple[float, float, float] = weights_field()
-
-    def __check_init__(self):
-        if self.adaptation not in _ADAPT:
-            raise ValueError(f"adaptation: expected one of {_ADAPT}, got {self.adaptation!r}")
 
     def _measure(self, p: Prepared) -> "Tumblin1999":
         if self.L_wa is not None:
@@ -112,14 +118,13 @@ class Tumblin1999(AbstractOperator):
         L_wa = adaptation_luminance(p, self.adaptation, self.bins)
         return eqx.tree_at(lambda o: o.L_wa, self, L_wa, is_leaf=lambda x: x is None)
 
-    def _apply(self, p: Prepared) -> Array:
+    def _curve(self, L: Array) -> Array:
         assert self.L_wa is not None
-        return scale_by_luminance(p.rgb, p.L, lambda L: tumblin_curve(
-            L, self.L_wa, self.L_da, self.C_max, self.gamma_log) / self.L_max)
+        return tumblin_curve(L, self.L_wa, self.L_da, self.C_max, self.gamma_log) / self.L_max
 
 
 @register("tumblin_reinhard")
-class TumblinReinhard(AbstractOperator):
+class TumblinReinhard(_AbstractTumblin):
     """The nonlinear operator of seed 000: formula 1 followed by Reinhard's formula 2.
 
     ``L_d = T(L_w) / L_dmax`` with ``T`` the revised Tumblin–Rushmeier curve (formula 1),
@@ -145,17 +150,7 @@ class TumblinReinhard(AbstractOperator):
     L_wa: Array | None = eqx.field(default=None, converter=param)
     L_max: Array | None = eqx.field(default=None, converter=param)
     L_white: Array | None = eqx.field(default=None, converter=param)
-    L_da: Array = eqx.field(default=20.0, converter=param)
-    C_max: Array = eqx.field(default=100.0, converter=param)
     L_dmax: Array = eqx.field(default=100.0, converter=param)
-    adaptation: Literal["log_average", "trimmed"] = eqx.field(static=True, default="log_average")
-    gamma_log: Literal["ln", "log10"] = eqx.field(static=True, default="ln")
-    bins: int = eqx.field(static=True, default=8192)
-    weights: tuple[float, float, float] = weights_field()
-
-    def __check_init__(self):
-        if self.adaptation not in _ADAPT:
-            raise ValueError(f"adaptation: expected one of {_ADAPT}, got {self.adaptation!r}")
 
     def _measure(self, p: Prepared) -> "TumblinReinhard":
         L_wa = self.L_wa
@@ -168,16 +163,17 @@ class TumblinReinhard(AbstractOperator):
         if L_white is None:
             t = tumblin_curve(L_max, L_wa, self.L_da, self.C_max, self.gamma_log) / self.L_dmax
             L_white = jnp.maximum(t, jnp.finfo(t.dtype).tiny)
-        return eqx.tree_at(lambda o: (o.L_wa, o.L_max, o.L_white), self, (L_wa, L_max, L_white),
-                           is_leaf=lambda x: x is None)
+        return eqx.tree_at(
+            lambda o: (o.L_wa, o.L_max, o.L_white),
+            self,
+            (L_wa, L_max, L_white),
+            is_leaf=lambda x: x is None,
+        )
 
-    def _apply(self, p: Prepared) -> Array:
+    def _curve(self, L: Array) -> Array:
         assert self.L_wa is not None and self.L_white is not None
-        def curve(L):
-            L_d = tumblin_curve(L, self.L_wa, self.L_da, self.C_max, self.gamma_log)
-            return reinhard_curve(L_d / self.L_dmax, self.L_white)
-
-        return scale_by_luminance(p.rgb, p.L, curve)
+        L_d = tumblin_curve(L, self.L_wa, self.L_da, self.C_max, self.gamma_log)
+        return reinhard_curve(L_d / self.L_dmax, self.L_white)
 
 
 __all__ = ["Tumblin1999", "TumblinReinhard", "stevens_gamma", "tumblin_curve"]

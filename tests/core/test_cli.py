@@ -28,12 +28,17 @@ def test_tonemap_writes_png_and_reports_estimates(tmp_path, capsys):
     assert 40 < img.mean() < 200 and img.max() == 255  # neither black nor blown out
 
 
-@pytest.mark.parametrize("argv,needle", [
-    (["--method", "linear", "--exposure-time", "0.01", "--f-number", "2", "--iso", "100"],
-     "exposure_time: 0.01"),
-    (["--method", "tumblin_reinhard", "--L-wa", "0.05"], "L_wa: 0.05"),
-    (["--method", "reinhard2002", "--key", "0.09", "--bits", "16"], "key: 0.09"),
-])
+@pytest.mark.parametrize(
+    "argv,needle",
+    [
+        (
+            ["--method", "linear", "--exposure-time", "0.01", "--f-number", "2", "--iso", "100"],
+            "exposure_time: 0.01",
+        ),
+        (["--method", "tumblin_reinhard", "--L-wa", "0.05"], "L_wa: 0.05"),
+        (["--method", "reinhard2002", "--key", "0.09", "--bits", "16"], "key: 0.09"),
+    ],
+)
 def test_tonemap_options(tmp_path, capsys, argv, needle):
     out = tmp_path / "o.png"
     assert main(["tonemap", CORNELL, "-o", str(out), *argv]) == 0
@@ -45,8 +50,10 @@ def test_tonemap_table_and_exr_output(tmp_path, capsys):
     table = tmp_path / "t.csv"
     table.write_text("luminance,display\n0.001,0.01\n0.1,0.5\n10,1\n")
     exr = tmp_path / "o.exr"
-    assert main(["tonemap", CORNELL, "-o", str(exr), "--method", "tabulated",
-                 "--table", str(table)]) == 0
+    assert (
+        main(["tonemap", CORNELL, "-o", str(exr), "--method", "tabulated", "--table", str(table)])
+        == 0
+    )
     from hdrjax import io
 
     back = io.read(exr)
@@ -54,16 +61,25 @@ def test_tonemap_table_and_exr_output(tmp_path, capsys):
     assert back.image.shape == (512, 512, 3) and 0.5 < Y.max() <= 1.0 + 1e-6
 
 
-@pytest.mark.parametrize("argv,code,needle", [
-    (["tonemap", "missing.exr", "-o", "x.png"], 1, "missing.exr: no such file"),
-    (["tonemap", CORNELL, "-o", "x.bmp"], 2, "unsupported output type .bmp"),
-    (["tonemap", CORNELL, "-o", "x.png", "--method", "nope"], 2, "valid: "),
-    (["tonemap", CORNELL, "-o", "x.png", "--method", "linear", "--key", "0.2"], 2,
-     "--key does not apply to --method linear"),
-    (["tonemap", CORNELL, "-o", "x.png", "--method", "tabulated"], 2, "needs --table"),
-    (["tonemap", CORNELL, "-o", "x.png", "--method", "linear", "--iso", "100"], 2,
-     "given together"),
-])
+@pytest.mark.parametrize(
+    "argv,code,needle",
+    [
+        (["tonemap", "missing.exr", "-o", "x.png"], 1, "missing.exr: no such file"),
+        (["tonemap", CORNELL, "-o", "x.bmp"], 2, "unsupported output type .bmp"),
+        (["tonemap", CORNELL, "-o", "x.png", "--method", "nope"], 2, "valid: "),
+        (
+            ["tonemap", CORNELL, "-o", "x.png", "--method", "linear", "--key", "0.2"],
+            2,
+            "--key does not apply to --method linear",
+        ),
+        (["tonemap", CORNELL, "-o", "x.png", "--method", "tabulated"], 2, "needs --table"),
+        (
+            ["tonemap", CORNELL, "-o", "x.png", "--method", "linear", "--iso", "100"],
+            2,
+            "given together",
+        ),
+    ],
+)
 def test_errors_are_one_line_with_exit_codes(tmp_path, capsys, argv, code, needle):
     argv = [a if a != "x.png" and a != "x.bmp" else str(tmp_path / a) for a in argv]
     assert main(argv) == code
@@ -83,8 +99,21 @@ def test_corrupt_input_is_bad_data(tmp_path, capsys):
 def test_bad_table_is_bad_data(tmp_path, capsys):
     table = tmp_path / "t.csv"
     table.write_text("luminance,display\n1,0.9\n10,0.1\n")
-    assert main(["tonemap", CORNELL, "-o", str(tmp_path / "o.png"), "--method", "tabulated",
-                 "--table", str(table)]) == 1
+    assert (
+        main(
+            [
+                "tonemap",
+                CORNELL,
+                "-o",
+                str(tmp_path / "o.png"),
+                "--method",
+                "tabulated",
+                "--table",
+                str(table),
+            ]
+        )
+        == 1
+    )
     assert "t.csv" in capsys.readouterr().err
 
 
@@ -99,11 +128,24 @@ def test_info_prints_statistics_and_estimates(capsys):
 
 
 def test_module_and_script_are_the_same_command():
-    a = subprocess.run([sys.executable, "-m", "hdrjax", "tonemap", "--help"],
-                       capture_output=True, text=True, check=True).stdout
-    script = subprocess.run([sys.executable, "-c", "import sys; from hdrjax.cli import main;"
-                             " sys.argv[0] = 'hdrjax'; sys.exit(main())", "tonemap", "--help"],
-                            capture_output=True, text=True, check=True).stdout
+    a = subprocess.run(
+        [sys.executable, "-m", "hdrjax", "tonemap", "--help"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    script = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys; from hdrjax.cli import main; sys.argv[0] = 'hdrjax'; sys.exit(main())",
+            "tonemap",
+            "--help",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     assert a == script and "--exposure-time" in a
     from importlib.metadata import entry_points
 

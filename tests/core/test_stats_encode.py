@@ -47,31 +47,37 @@ def test_measure_against_numpy(x64):
     f = L[ok]
     pos = f[f > 0]
     assert int(st.n_nonfinite) == 2 and int(st.n_positive) == pos.size
-    np.testing.assert_allclose(float(st.log_average),
-                               np.exp(np.mean(np.log(1e-6 + np.maximum(f, 0)))), rtol=1e-9)
+    np.testing.assert_allclose(
+        float(st.log_average), np.exp(np.mean(np.log(1e-6 + np.maximum(f, 0)))), rtol=1e-9
+    )
     np.testing.assert_allclose(float(st.max), f.max())
     np.testing.assert_allclose(float(st.min), -0.5)
     np.testing.assert_allclose(float(st.min_positive), pos.min())
     p1, p99 = np.percentile(pos, [1, 99])
     np.testing.assert_allclose([float(st.p01), float(st.p99)], [p1, p99], rtol=1e-9)
-    np.testing.assert_allclose(float(st.log_average_trimmed),
-                               np.exp(np.mean(np.log(pos[pos <= p99]))), rtol=1e-9)
+    np.testing.assert_allclose(
+        float(st.log_average_trimmed), np.exp(np.mean(np.log(pos[pos <= p99]))), rtol=1e-9
+    )
     np.testing.assert_allclose(float(st.dynamic_range_stops), np.log2(f.max() / pos.min()))
 
 
 def test_luminance_weights_from_primaries():
     # ACES AP0 (Carrots.exr): Y weights with a negative blue (SOURCES.md)
     ap0 = (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767)
-    np.testing.assert_allclose(hdrjax.luminance_weights(ap0),
-                               [0.34397, 0.72817, -0.07213], atol=5e-6)
+    np.testing.assert_allclose(
+        hdrjax.luminance_weights(ap0), [0.34397, 0.72817, -0.07213], atol=5e-6
+    )
     assert hdrjax.luminance_weights(None) == (0.2126, 0.7152, 0.0722)
     with pytest.raises(ValueError, match="chromaticities"):
         hdrjax.luminance_weights((0.1, 0.2))
     with pytest.raises(ValueError, match="degenerate"):
         hdrjax.luminance_weights((0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3127, 0.329))
     rgb = np.random.default_rng(0).uniform(0, 1, (4, 5, 3))
-    np.testing.assert_allclose(hdrjax.luminance(rgb, ap0 and hdrjax.luminance_weights(ap0)),
-                               rgb @ np.array(hdrjax.luminance_weights(ap0)), rtol=1e-5)
+    np.testing.assert_allclose(
+        hdrjax.luminance(rgb, ap0 and hdrjax.luminance_weights(ap0)),
+        rgb @ np.array(hdrjax.luminance_weights(ap0)),
+        rtol=1e-5,
+    )
 
 
 def test_srgb_matches_colour_science(x64):

@@ -22,23 +22,35 @@ CASES = [
     ("gamma", ch.tonemapping_operator_gamma, {"gamma": 2.2, "EV": -1.5}, {}),
     ("logarithmic", ch.tonemapping_operator_logarithmic, {"q": 3.0, "k": 2.0}, {}),
     ("exponential", ch.tonemapping_operator_exponential, {"q": 2.0, "k": 1.5}, {}),
-    ("logarithmic_mapping", ch.tonemapping_operator_logarithmic_mapping,
-     {"p": 2.0, "q": 1.5}, {}),
-    ("exponentiation_mapping", ch.tonemapping_operator_exponentiation_mapping,
-     {"p": 0.6, "q": 1.2}, {}),
+    ("logarithmic_mapping", ch.tonemapping_operator_logarithmic_mapping, {"p": 2.0, "q": 1.5}, {}),
+    (
+        "exponentiation_mapping",
+        ch.tonemapping_operator_exponentiation_mapping,
+        {"p": 0.6, "q": 1.2},
+        {},
+    ),
     ("schlick1994", ch.tonemapping_operator_Schlick1994, {"p": 20.0}, {}),
-    ("tumblin1999", ch.tonemapping_operator_Tumblin1999,
-     {"L_da": 25.0, "C_max": 80.0, "L_max": 120.0}, {}),
-    ("reinhard2004", ch.tonemapping_operator_Reinhard2004,
-     {"f": 0.5, "m": 0.4, "a": 0.3, "c": 0.2}, {}),
+    (
+        "tumblin1999",
+        ch.tonemapping_operator_Tumblin1999,
+        {"L_da": 25.0, "C_max": 80.0, "L_max": 120.0},
+        {},
+    ),
+    (
+        "reinhard2004",
+        ch.tonemapping_operator_Reinhard2004,
+        {"f": 0.5, "m": 0.4, "a": 0.3, "c": 0.2},
+        {},
+    ),
     ("reinhard2004", ch.tonemapping_operator_Reinhard2004, {"m": 0.0}, {}),  # automatic m
     ("filmic", ch.tonemapping_operator_filmic, {"exposure_bias": 1.5}, {}),
 ]
 PER_CHANNEL = {"simple", "gamma", "filmic"}
 
 
-@pytest.mark.parametrize("name,fn,params,_", CASES, ids=[f"{c[0]}-{i}" for i, c in
-                                                         enumerate(CASES)])
+@pytest.mark.parametrize(
+    "name,fn,params,_", CASES, ids=[f"{c[0]}-{i}" for i, c in enumerate(CASES)]
+)
 def test_matches_colour_hdri(x64, name, fn, params, _):
     rgb = natural((20, 24), seed=7, dtype=np.float64) * 30.0
     kw = dict(params)

@@ -22,10 +22,23 @@ LOCAL = ("reinhard2002_local", "reinhard2002_auto")  # neighbourhoods: test_rein
 
 def test_registry_has_the_required_operators():
     required = {
-        "reinhard2002", "reinhard2002_local", "reinhard2002_auto", "tumblin_reinhard",
-        "linear", "tabulated", "simple", "normalisation", "gamma", "logarithmic",
-        "exponential", "logarithmic_mapping", "exponentiation_mapping", "schlick1994",
-        "tumblin1999", "reinhard2004", "filmic",
+        "reinhard2002",
+        "reinhard2002_local",
+        "reinhard2002_auto",
+        "tumblin_reinhard",
+        "linear",
+        "tabulated",
+        "simple",
+        "normalisation",
+        "gamma",
+        "logarithmic",
+        "exponential",
+        "logarithmic_mapping",
+        "exponentiation_mapping",
+        "schlick1994",
+        "tumblin1999",
+        "reinhard2004",
+        "filmic",
     }
     assert required <= set(NAMES)
 
@@ -73,8 +86,9 @@ def test_bad_pixels_do_not_reach_statistics_or_neighbours(name):
     measure = eqx.filter_jit(lambda o, x: o.measure(x))
     ref_op = measure(op, finite_only)
     got_op = measure(op, img)
-    for (k, a), (_, b) in zip(ref_op.parameters().items(), got_op.parameters().items(),
-                              strict=True):
+    for (k, a), (_, b) in zip(
+        ref_op.parameters().items(), got_op.parameters().items(), strict=True
+    ):
         if isinstance(a, float):
             np.testing.assert_allclose(b, a, rtol=RTOL32, err_msg=f"{name}/{k}")
     patched = np.where(bad[..., None], img[~bad][0], img)
@@ -86,8 +100,9 @@ def test_bad_pixels_do_not_reach_statistics_or_neighbours(name):
 @pytest.mark.parametrize("name", NAMES)
 def test_gradients_are_finite(name):
     cases = hard_cases(np.float32)
-    batch = jnp.asarray(np.stack([v for k, v in cases.items() if k != "nan_and_inf"]
-                                 + [natural((8, 8))]))
+    batch = jnp.asarray(
+        np.stack([v for k, v in cases.items() if k != "nan_and_inf"] + [natural((8, 8))])
+    )
     op = make(name)
     params, static = eqx.partition(op, eqx.is_inexact_array)
 
@@ -104,11 +119,17 @@ def test_gradients_are_finite(name):
 @pytest.mark.parametrize("name", NAMES)
 def test_float16_input(name):
     img = natural().astype(np.float16)
-    out = hdrjax.tonemap(img, name, **({} if name != "tabulated" else
-                                        dict(luminance=[0.01, 1, 100], display=[0.02, .5, 1])))
+    out = hdrjax.tonemap(
+        img,
+        name,
+        **({} if name != "tabulated" else dict(luminance=[0.01, 1, 100], display=[0.02, 0.5, 1])),
+    )
     assert out.dtype == jnp.float32
-    ref = hdrjax.tonemap(img.astype(np.float32), name, **({} if name != "tabulated" else
-                                        dict(luminance=[0.01, 1, 100], display=[0.02, .5, 1])))
+    ref = hdrjax.tonemap(
+        img.astype(np.float32),
+        name,
+        **({} if name != "tabulated" else dict(luminance=[0.01, 1, 100], display=[0.02, 0.5, 1])),
+    )
     np.testing.assert_allclose(out, ref, rtol=RTOL32)
 
 

@@ -43,8 +43,14 @@ def test_linear_maps_L_max_to_white(x64):
     np.testing.assert_allclose((auto @ np.array(hdrjax.REC709_WEIGHTS)).max(), 1.0, rtol=1e-12)
 
 
-@pytest.mark.parametrize("kw", [dict(exposure_time=0.01), dict(L_max=2.0, ev100=3.0),
-                                dict(exposure_time=0.01, f_number=2, iso=100, L_max=3.0)])
+@pytest.mark.parametrize(
+    "kw",
+    [
+        dict(exposure_time=0.01),
+        dict(L_max=2.0, ev100=3.0),
+        dict(exposure_time=0.01, f_number=2, iso=100, L_max=3.0),
+    ],
+)
 def test_linear_rejects_inconsistent_parameters(kw):
     with pytest.raises(ValueError, match="linear"):
         Linear(**kw)

@@ -24,8 +24,9 @@ def jgt_reference(rgb):
     pos = L[np.isfinite(L) & (L > 0)]
     l1, l99 = np.percentile(pos, [1, 99])
     lbar_t = np.exp(np.mean(np.log(pos[pos <= l99])))
-    key = 0.18 * 4 ** ((2 * np.log2(lbar_t) - np.log2(l1) - np.log2(l99))
-                       / (np.log2(l99) - np.log2(l1)))
+    key = 0.18 * 4 ** (
+        (2 * np.log2(lbar_t) - np.log2(l1) - np.log2(l99)) / (np.log2(l99) - np.log2(l1))
+    )
     lbar = np.exp(np.mean(np.log(1e-6 + np.maximum(L, 0))))
     zones = np.log2(pos.max()) - np.log2(pos.min())
     if zones <= np.log2(lbar_t) + 4.415037:
@@ -83,13 +84,17 @@ def test_seed_003_white_is_the_largest_luminance(x64):
 
 
 @settings(deadline=None, max_examples=25)
-@given(st.lists(st.floats(1e-6, 1e6), min_size=2, max_size=40),
-       st.floats(0.05, 1.0), st.floats(0.5, 1e4))
+@given(
+    st.lists(st.floats(1e-6, 1e6), min_size=2, max_size=40),
+    st.floats(0.05, 1.0),
+    st.floats(0.5, 1e4),
+)
 def test_global_curve_is_monotone(values, key, white):
     L = np.sort(np.asarray(values))
     rgb = np.repeat(L[None, :, None], 3, axis=2).astype(np.float32)
-    out = np.asarray(hdrjax.tonemap(rgb, "reinhard2002", key=key, L_white=white,
-                                    log_average=1.0))[0, :, 0]
+    out = np.asarray(hdrjax.tonemap(rgb, "reinhard2002", key=key, L_white=white, log_average=1.0))[
+        0, :, 0
+    ]
     assert np.all(np.diff(out) >= -1e-7 * np.abs(out[1:]))
 
 
