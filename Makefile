@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench lint clean
+.PHONY: demo test bench bench-quick lint clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,12 +19,14 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest
 
+# the full suite writes benchmarks/results/ and regenerates the README's performance section
 bench: $(STAMP)
-	$(PY) benchmarks/bench_reinhard.py
-	$(PY) benchmarks/bench_rgbe_read.py
-	$(PY) benchmarks/bench_filters.py
-	$(PY) benchmarks/bench_lights.py
-	$(PY) benchmarks/bench_vision.py
+	$(PY) benchmarks/run.py
+	$(PY) benchmarks/report.py --readme README.md
+
+# a few minutes: small sizes, its own folder (the committed full results stay as they are)
+bench-quick: $(STAMP)
+	$(PY) benchmarks/run.py --quick --out benchmarks/results/quick
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check hdrjax tests benchmarks

@@ -9,8 +9,11 @@ the same case is a peer, so a ratio below 1 means hdrjax is faster.
 
 Times: one warm-up call first (its extra time over the median run is the compile time when
 the function is jit-compiled), then ``repeats`` calls; the median and the half-range are
-recorded. Outputs are blocked on (``jax.block_until_ready``) so asynchronous dispatch is not
-mistaken for speed.
+recorded (and the fastest call, ``min_s``: other processes on a shared machine only ever add
+time). Outputs are blocked on (``jax.block_until_ready``) so asynchronous dispatch is not
+mistaken for speed. A benchmark that times its calls itself (interleaving two readers, say)
+turns its list of times into the same summary with :func:`summarize`; one that measures
+compilation directly (``jit(f).lower(x).compile()``) passes ``compile_s=`` to :func:`record`.
 """
 
 from __future__ import annotations
@@ -29,20 +32,31 @@ def _call(fn: Callable[[], Any]) -> float:
     return time.perf_counter() - t0
 
 
+def summarize(times: list[float], first_s: float = float("nan")) -> dict[str, float]:
+    """``{"median_s", "spread_s", "repeats", "first_s", "min_s"}`` of measured call times (s).
+
+    The spread is the half-range ``(max - min) / 2``; ``first_s`` is the warm-up call (NaN
+    when there was none).
+    """
+    if not times:
+        raise ValueError("summarize: times is empty (expected at least one measured call)")
+    return {
+        "median_s": statistics.median(times),
+        "spread_s": (max(times) - min(times)) / 2,
+        "repeats": len(times),
+        "first_s": first_s,
+        "min_s": min(times),
+    }
+
+
 def measure(fn: Callable[[], Any], repeats: int = 5, warmup: bool = True) -> dict[str, float]:
-    """Time ``fn()``: ``{"median_s", "spread_s", "repeats", "first_s"}``.
+    """Time ``fn()``: ``{"median_s", "spread_s", "repeats", "first_s", "min_s"}``.
 
     ``first_s`` is the first (warm-up) call, which includes tracing and compilation for a
     jit-compiled function; ``compile_s`` in :func:`record` is ``first_s - median_s``.
     """
     first = _call(fn) if warmup else float("nan")
-    ts = [_call(fn) for _ in range(max(1, repeats))]
-    return {
-        "median_s": statistics.median(ts),
-        "spread_s": (max(ts) - min(ts)) / 2,
-        "repeats": len(ts),
-        "first_s": first,
-    }
+    return summarize([_call(fn) for _ in range(max(1, repeats))], first)
 
 
 def record(
@@ -54,14 +68,16 @@ def record(
     repeats: int = 5,
     compiled: bool = False,
     timing: dict[str, float] | None = None,
+    compile_s: float | None = None,
     verbose: bool = True,
     **extra: Any,
 ) -> dict[str, Any]:
     """Time ``fn`` (or take a ready ``timing`` from :func:`measure`) and make a record.
 
     ``compiled=True`` reports ``compile_s`` (first call minus median), for jit-compiled
-    hdrjax functions; peers get ``compile_s = None``. ``extra`` keeps anything else the
-    report should show (error against a reference, steps, peak memory, frames/s ...).
+    hdrjax functions; peers get ``compile_s = None``. A ``compile_s`` given explicitly (a
+    measured ``lower(...).compile()``) is reported as it is. ``extra`` keeps anything else
+    the report should show (error against a reference, steps, peak memory, frames/s ...).
     """
     t = timing if timing is not None else measure(fn, repeats)
     rec: dict[str, Any] = {
@@ -78,6 +94,10 @@ def record(
         ),
         "extra": dict(extra),
     }
+    if compile_s is not None:
+        rec["compile_s"] = float(compile_s)
+    if "min_s" in t:
+        rec["min_s"] = float(t["min_s"])
     if verbose:
         comp = "" if rec["compile_s"] is None else f"  compile {rec['compile_s']:.2f} s"
         more = "".join(f"  {k}={_fmt(v)}" for k, v in extra.items())

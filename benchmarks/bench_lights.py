@@ -1,11 +1,18 @@
 """Benchmark: hdrjax.lights.detect against seed 001's own listing, and its accuracy/time curve.
 
-Run: ``.venv/bin/python benchmarks/bench_lights.py [--quick] [--json out.json]``
+Run: ``.venv/bin/python benchmarks/bench_lights.py [--quick]``
 
-Everything runs in one process on the same maps (``data/rooitou_park_1k.hdr`` always, and
-the five lat-long maps of ``../shared/data/hdr`` when present). Times are wall-clock medians
-over repeats after a warm-up; hdrjax's compile time (first call minus a steady call) is
-reported separately and never mixed into the ratios.
+Everything runs in one process on the same maps: ``data/rooitou_park_1k.hdr`` always, and in
+full mode the lat-long maps of ``../shared/data/hdr`` when present. Times are wall-clock
+medians over repeats after a warm-up; hdrjax's compile time (first call minus the median) is
+reported separately and never mixed into the ratios. Quick mode: the bundled map only, 5
+repeats, three points of the accuracy/time curve, median cut with 16 lights, no batch.
+
+Records: ``detect defaults <map>`` (hdrjax with a JAX and a NumPy input against the seed
+listing, with the quality figures below as extras), ``detect batch of N maps``, ``median_cut
+<map> n=<lights>``, and the accuracy/time curve ``lights.detect (width, samples/px, blur)``:
+error = mean angular error (degrees) of the found significant blobs over the maps, time =
+median over the maps of each map's median time.
 
 **The peer** is the seed's listing (``../shared/seeds/001_*.txt``) made runnable with the
 fewest changes, in :class:`SeedListing`: OpenCV bilinear resize to width 1024 and a
@@ -31,13 +38,11 @@ centroid to the (energy-weighted) mean direction of the lights covering it.
 """
 
 import argparse
-import json
 import math
 import statistics
-import sys
-import time
 from pathlib import Path
 
+import _harness as H
 import cv2
 import jax
 import jax.numpy as jnp
@@ -59,6 +64,8 @@ MAPS = [
 SUN_MAPS = ("rooitou_park_1k.hdr", "venice_sunset_1k.hdr")
 MATCH_DEG = 1.0
 SIGNIFICANT_SHARE = 0.01
+BENCH = "lights"
+CURVE = "lights.detect (width, samples/px, blur)"
 
 
 # ----------------------------------------------------------------------------- the peer
@@ -338,22 +345,7 @@ def quality(
     }
 
 
-# ----------------------------------------------------------------------------- timing
-
-
-def timed(fn, repeats: int) -> tuple[float, object]:
-    """Median wall time (s) of ``fn()`` over ``repeats`` calls, and its last result.
-
-    The fastest call is kept in ``timed.best`` (other processes on a shared machine only
-    ever add time: the minimum is the cleanest estimate of the cost itself).
-    """
-    ts, out = [], None
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = jax.block_until_ready(fn())
-        ts.append(time.perf_counter() - t)
-    timed.best = min(ts)
-    return statistics.median(ts), out
+# ----------------------------------------------------------------------------- benchmark
 
 
 def ours_quality(res: hl.Lights, truth: list[dict]) -> dict:
@@ -366,164 +358,138 @@ def ours_quality(res: hl.Lights, truth: list[dict]) -> dict:
     )
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fewer repeats, smaller sweep")
-    ap.add_argument("--json", type=Path, help="write all figures here")
-    args = ap.parse_args()
-    rep = 5 if args.quick else 15
+def _flat(q: dict) -> dict:
+    """Quality figures as flat extras of a record."""
+    return {k: q[k] for k in ("lights", "spurious", "missed", "significant", "err_mean")}
+
+
+def _last(fn):
+    """``fn`` that also keeps its latest result in ``fn.out`` (what was timed is checked)."""
+
+    def call():
+        call.out = fn()
+        return call.out
+
+    return call
+
+
+def run(quick: bool = False) -> list[dict]:
+    """Records of benchmark ``"lights"`` and the ``lights.detect`` accuracy/time curve."""
+    rep = 5 if quick else 15
     maps = []
-    for name, path in MAPS:
+    for name, path in MAPS[:1] if quick else MAPS:
         if not path.exists():
             print(f"(skipping {name}: {path} not found)")
             continue
         rgb = np.ascontiguousarray(hdrjax.io.read(path).rgb(), np.float32)
         maps.append((name, rgb, jnp.asarray(rgb), blobs(rgb)))
-    print(f"jax {jax.__version__}, {jax.devices()[0].platform}, maps: {len(maps)}\n")
-    report: dict = {"maps": [m[0] for m in maps]}
+    print(f"[lights] jax {jax.__version__}, {jax.devices()[0].platform}, maps: {len(maps)}")
+    out: list[dict] = []
 
     # ---- 1. hdrjax defaults vs the seed listing, same process, same maps
     peer = SeedListing()
-    rows = []
-    print("## Defaults vs the seed listing (per map; medians unless marked min; ms)\n")
-    print(
-        "| map | listing ms | hdrjax ms | ratio | hdrjax min ms | hdrjax ms (NumPy in) |"
-        " compile s | listing: lights/spurious/missed/err° | hdrjax: lights/spurious/missed/err° |"
-    )
-    print("|---|---|---|---|---|---|---|---|---|")
     for name, rgb, jrgb, truth in maps:
-        t_peer, lights = timed(lambda rgb=rgb: peer(rgb), max(3, rep // 3))
-        peer_dirs = unit_vectors(*peer.directions(lights, rgb.shape[:2]).T)
-        t0 = time.perf_counter()
-        jax.block_until_ready(hl.detect(jrgb))
-        first = time.perf_counter() - t0
-        t_ours, res = timed(lambda jrgb=jrgb: hl.detect(jrgb), rep)
-        t_min = timed.best
-        t_np, _ = timed(lambda rgb=rgb: hl.detect(rgb), rep)
-        qp, qo = quality(peer_dirs, truth), ours_quality(res, truth)
-        compile_s = max(first - t_ours, 0.0)
-        rows.append(
-            {
-                "map": name,
-                "listing_ms": t_peer * 1e3,
-                "hdrjax_ms": t_ours * 1e3,
-                "hdrjax_min_ms": t_min * 1e3,
-                "hdrjax_numpy_ms": t_np * 1e3,
-                "ratio": t_ours / t_peer,
-                "compile_s": compile_s,
-                "listing_quality": qp,
-                "hdrjax_quality": qo,
-            }
-        )
-
-        def fmt(q: dict) -> str:
-            return f"{q['lights']}/{q['spurious']}/{q['missed']}/{q['err_mean']:.2f}"
-
-        print(
-            f"| {name} | {t_peer * 1e3:.1f} | {t_ours * 1e3:.2f} | {t_ours / t_peer:.3f} |"
-            f" {t_min * 1e3:.2f} | {t_np * 1e3:.2f} | {compile_s:.2f} | {fmt(qp)} | {fmt(qo)} |"
-        )
-    report["defaults"] = rows
+        case = f"detect defaults {name}"
+        listing = _last(lambda rgb=rgb: peer(rgb))
+        t_peer = H.measure(listing, max(3, rep // 3))
+        qp = quality(unit_vectors(*peer.directions(listing.out, rgb.shape[:2]).T), truth)
+        ours = _last(lambda jrgb=jrgb: hl.detect(jrgb))
+        t_ours = H.measure(ours, rep)
+        qo = ours_quality(ours.out, truth)
+        t_np = H.measure(lambda rgb=rgb: hl.detect(rgb), rep)
+        out += [
+            H.record(BENCH, case, "hdrjax", timing=t_ours, compiled=True, **_flat(qo)),
+            H.record(BENCH, case, "hdrjax (NumPy input)", timing=t_np),
+            H.record(BENCH, case, "seed 001 listing", timing=t_peer, **_flat(qp)),
+        ]
 
     # ---- 2. batch: one vmapped call over the same-size maps
     same = [m for m in maps if m[1].shape == maps[0][1].shape]
-    batch = jnp.stack([m[2] for m in same])
-    jax.block_until_ready(hl.detect(batch))
-    t_b, _ = timed(lambda: hl.detect(batch), rep)
-    print(
-        f"\nBatch of {len(same)} maps in one vmapped call: {t_b * 1e3:.2f} ms "
-        f"({t_b * 1e3 / len(same):.2f} ms per map)\n"
-    )
-    report["batch"] = {"maps": len(same), "ms": t_b * 1e3}
+    if len(same) > 1:
+        batch = jnp.stack([m[2] for m in same])
+        t_b = H.measure(lambda: hl.detect(batch), rep)
+        out.append(
+            H.record(
+                BENCH,
+                f"detect batch of {len(same)} maps",
+                "hdrjax",
+                timing=t_b,
+                compiled=True,
+                maps=len(same),
+                per_map_ms=t_b["median_s"] * 1e3 / len(same),
+            )
+        )
 
     # ---- 3. the accuracy/time curve
-    widths = (256, 512) if args.quick else (256, 512, 1024)
-    mults = (0.002, 0.006) if args.quick else (0.002, 0.006, 0.02)
-    blurs = (0.0, 1.0)
-    print(
-        "## Accuracy and time (ms: median over maps of each map's median / minimum;"
-        " compile: the largest first-call overhead)\n"
-    )
-    print(
-        "| width | samples/px | blur | ms | min ms | compile s | lights | spurious (sun maps) |"
-        " missed (of significant) | mean err° | max err° |"
-    )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    curve = []
-    for w in widths:
-        for mult in mults:
-            for b in blurs:
-                ms, mins, comp, qs = [], [], [], []
-                for name, _, jrgb, truth in maps:
-                    n = max(64, round(mult * w * w / 2))
-
-                    def run(jrgb=jrgb, n=n, w=w, b=b):
-                        return hl.detect(jrgb, width=w, n_samples=n, blur=b)
-
-                    t0 = time.perf_counter()
-                    jax.block_until_ready(run())
-                    first = time.perf_counter() - t0
-                    t, res = timed(run, rep)
-                    ms.append(t * 1e3)
-                    mins.append(timed.best * 1e3)
-                    comp.append(max(first - t, 0.0))
-                    qs.append((name, ours_quality(res, truth)))
-                sun_spur = sum(q["spurious"] for nm, q in qs if nm in SUN_MAPS)
-                missed = sum(q["missed"] for _, q in qs)
-                sig = sum(q["significant"] for _, q in qs)
-                errs = [q["err_mean"] for _, q in qs if q["found"]]
-                errmax = max((q["err_max"] for _, q in qs if q["found"]), default=float("nan"))
-                row = {
-                    "width": w,
-                    "samples_per_px": mult,
-                    "blur": b,
-                    "ms": statistics.median(ms),
-                    "min_ms": statistics.median(mins),
-                    "compile_s": max(comp),  # the first map of each shape compiles
-                    "lights": sum(q["lights"] for _, q in qs),
-                    "sun_spurious": sun_spur,
-                    "missed": missed,
-                    "significant": sig,
-                    "err_mean": float(np.mean(errs)) if errs else float("nan"),
-                    "err_max": errmax,
-                    "per_map": dict(qs),
-                }
-                curve.append(row)
-                print(
-                    f"| {w} | {mult} | {b:g} | {row['ms']:.2f} | {row['min_ms']:.2f} |"
-                    f" {row['compile_s']:.1f} |"
-                    f" {row['lights']} | {sun_spur} | {missed} of {sig} |"
-                    f" {row['err_mean']:.2f} | {errmax:.2f} |"
-                )
-    report["curve"] = curve
+    if quick:
+        settings = [(256, 0.006, 0.0), (512, 0.002, 0.0), (512, 0.006, 0.0)]
+    else:
+        settings = [
+            (w, mult, b)
+            for w in (256, 512, 1024)
+            for mult in (0.002, 0.006, 0.02)
+            for b in (0.0, 1.0)
+        ]
+    for w, mult, b in settings:
+        ms, mins, comp, qs = [], [], [], []
+        for name, _, jrgb, truth in maps:
+            n = max(64, round(mult * w * w / 2))
+            det = _last(
+                lambda jrgb=jrgb, n=n, w=w, b=b: hl.detect(jrgb, width=w, n_samples=n, blur=b)
+            )
+            t = H.measure(det, rep)
+            ms.append(t["median_s"])
+            mins.append(t["min_s"])
+            comp.append(max(t["first_s"] - t["median_s"], 0.0))
+            qs.append((name, ours_quality(det.out, truth)))
+        errs = [q["err_mean"] for _, q in qs if q["found"]]
+        out.append(
+            H.accuracy_point(
+                CURVE,
+                f"w={w} s={mult:g} blur={b:g}",
+                float(np.mean(errs)) if errs else float("nan"),
+                statistics.median(ms),
+                default=(
+                    w == hl.DEFAULT_WIDTH
+                    and mult == hl.DEFAULT_SAMPLES_PER_PIXEL
+                    and b == hl.DEFAULT_BLUR
+                ),
+                error_kind="mean angular error (deg)",
+                width=w,
+                samples_per_px=mult,
+                blur=b,
+                min_ms=statistics.median(mins) * 1e3,
+                compile_s=max(comp),  # the first map of each shape compiles
+                lights=sum(q["lights"] for _, q in qs),
+                sun_spurious=sum(q["spurious"] for nm, q in qs if nm in SUN_MAPS),
+                missed=sum(q["missed"] for _, q in qs),
+                significant=sum(q["significant"] for _, q in qs),
+                err_max=max((q["err_max"] for _, q in qs if q["found"]), default=float("nan")),
+                maps=len(qs),
+                per_map=dict(qs),
+            )
+        )
 
     # ---- 4. median cut (the comparison method)
-    print("\n## Median cut (Debevec 2005), 16 and 64 lights\n")
-    print("| map | lights | ms | compile s | energy conserved (rel. err) |")
-    print("|---|---|---|---|---|")
-    mc = []
     for name, _, jrgb, _ in maps:
-        for n in (16, 64):
-            t0 = time.perf_counter()
-            jax.block_until_ready(hl.median_cut(jrgb, n_lights=n))
-            first = time.perf_counter() - t0
-            t, res = timed(lambda jrgb=jrgb, n=n: hl.median_cut(jrgb, n_lights=n), rep)
-            err = abs(float(np.asarray(res.energy_share).sum()) - 1.0)
-            mc.append(
-                {
-                    "map": name,
-                    "n": n,
-                    "ms": t * 1e3,
-                    "compile_s": max(first - t, 0.0),
-                    "energy_err": err,
-                }
+        for n in (16,) if quick else (16, 64):
+            mc = _last(lambda jrgb=jrgb, n=n: hl.median_cut(jrgb, n_lights=n))
+            t = H.measure(mc, rep)
+            err = abs(float(np.asarray(mc.out.energy_share).sum()) - 1.0)
+            out.append(
+                H.record(
+                    BENCH,
+                    f"median_cut {name} n={n}",
+                    "hdrjax",
+                    timing=t,
+                    compiled=True,
+                    energy_err=err,
+                )
             )
-            print(f"| {name} | {n} | {t * 1e3:.2f} | {max(first - t, 0):.1f} | {err:.1e} |")
-    report["median_cut"] = mc
-    if args.json:
-        args.json.write_text(json.dumps(report, indent=1, default=float))
-    return 0
+    return out
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="bundled map only, fewer repeats")
+    run(ap.parse_args().quick)

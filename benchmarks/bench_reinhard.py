@@ -1,5 +1,6 @@
-"""Reinhard 2002 with automatic key and white point at 4096×4096 RGB float32, in one process.
+"""Reinhard 2002 with automatic key and white point on RGB float32, in one process.
 
+Full mode: 4096×4096, 7 repeats; quick mode: 1024×1024, 5 repeats (peers 3 repeats).
 Compared against:
   * a NumPy float32 implementation of the same operator and JGT parameters
     (``np.percentile`` for P1/P99);
@@ -9,26 +10,24 @@ Compared against:
 
 hdrjax is timed three ways: the full call (statistics + mapping, fresh output buffer), the
 same with the input buffer donated (``donate_argnums``: no page faults for the output), and
-the statistics pass alone. Compile time is reported separately. Each figure is the median
-of ``--repeats`` runs after one warm-up.
+the statistics pass alone (its own case: it has no peer). Compile time (``lower().compile()``)
+is reported separately. Each figure is the median of the repeats after one warm-up. The
+hdrjax output is checked against the NumPy peer of the same operator (``max_rel_err``).
 
-Usage: ``python benchmarks/bench_reinhard.py [--size 4096] [--repeats 7] [--json PATH]``
+Usage: ``python benchmarks/bench_reinhard.py [--quick] [--size N] [--repeats R] [--skip-peers]``
 """
 
 import argparse
-import json
-import os
-import platform
-import statistics
 import time
 
+import _harness as H
 import jax
 import numpy as np
 
-import hdrjax
 from hdrjax.operators import Reinhard2002
 
 W = np.array([0.2126, 0.7152, 0.0722], np.float32)
+BENCH = "reinhard"
 
 
 def numpy_reinhard_auto(rgb: np.ndarray) -> np.ndarray:
@@ -50,125 +49,148 @@ def numpy_reinhard_auto(rgb: np.ndarray) -> np.ndarray:
     return rgb * ratio[..., None]
 
 
-def timeit(fn, repeats: int) -> tuple[float, float]:
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts), (max(ts) - min(ts)) / 2
+def _compile_time(fn, x) -> float:
+    t0 = time.perf_counter()
+    fn.lower(x).compile()
+    return time.perf_counter() - t0
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", type=int, default=4096)
-    ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--json", default="benchmarks/results/reinhard.json")
-    ap.add_argument("--skip-peers", action="store_true", help="hdrjax only (quick)")
-    args = ap.parse_args()
-
-    n = args.size
+def run(
+    quick: bool = False,
+    *,
+    size: int | None = None,
+    repeats: int | None = None,
+    skip_peers: bool = False,
+) -> list[dict]:
+    """Records of benchmark ``"reinhard"`` (see the module docstring)."""
+    n = size or (1024 if quick else 4096)
+    reps = repeats or (5 if quick else 7)
+    peer_reps = 3
     rng = np.random.default_rng(0)
     L = rng.lognormal(0.0, 2.5, (n, n)).astype(np.float32)
     rgb = (L[..., None] * rng.uniform(0.6, 1.4, (n, n, 3))).astype(np.float32)
     mb = rgb.nbytes / 1e6
-    results: dict[str, dict] = {}
-
-    def record(name, fn, repeats=args.repeats, compile_s=None):
-        fn()  # warm-up
-        med, spread = timeit(fn, repeats)
-        results[name] = {"median_s": med, "spread_s": spread}
-        if compile_s is not None:
-            results[name]["compile_s"] = compile_s
-        extra = f"  (compile {compile_s:.2f} s)" if compile_s is not None else ""
-        print(f"{name:<44s} {med * 1e3:9.1f} ms ± {spread * 1e3:5.1f}{extra}", flush=True)
+    case = f"auto key+white {n}x{n} RGB"
+    common = {"pixels": n * n, "megabytes": round(mb, 1)}
+    out: list[dict] = []
 
     dst = np.empty_like(rgb)
-    record("bandwidth bound (np.copyto, 1 read + 1 write)", lambda: np.copyto(dst, rgb))
+    out.append(
+        H.record(
+            BENCH,
+            case,
+            "bandwidth bound (np.copyto, 1 read + 1 write)",
+            lambda: np.copyto(dst, rgb),
+            repeats=reps,
+            **common,
+        )
+    )
 
     x = jax.device_put(rgb)
     op = Reinhard2002()
     full = jax.jit(lambda img: op(img))
-    t0 = time.perf_counter()
-    full.lower(x).compile()
-    c_full = time.perf_counter() - t0
-    record("hdrjax reinhard2002 auto", lambda: full(x).block_until_ready(), compile_s=c_full)
+    c_full = _compile_time(full, x)
+    ours = np.asarray(full(x))
+    ref = numpy_reinhard_auto(rgb)
+    err = float(np.max(np.abs(ours - ref) / np.maximum(np.abs(ref), 1e-6)))
+    out.append(
+        H.record(
+            BENCH,
+            case,
+            "hdrjax",
+            lambda: full(x),
+            repeats=reps,
+            compile_s=c_full,
+            max_rel_err_vs_numpy=err,
+            **common,
+        )
+    )
 
     donated = jax.jit(lambda img: op(img), donate_argnums=0)
-    t0 = time.perf_counter()
-    donated.lower(x).compile()
-    c_don = time.perf_counter() - t0
-    bufs = [jax.device_put(rgb) for _ in range(args.repeats + 1)]
-    it = iter(bufs)
-    record(
-        "hdrjax reinhard2002 auto (donated input)",
-        lambda: donated(next(it)).block_until_ready(),
-        compile_s=c_don,
+    c_don = _compile_time(donated, x)
+    it = iter([jax.device_put(rgb) for _ in range(reps + 1)])  # warm-up + repeats
+    out.append(
+        H.record(
+            BENCH,
+            case,
+            "hdrjax (donated input)",
+            lambda: donated(next(it)),
+            repeats=reps,
+            compile_s=c_don,
+            **common,
+        )
     )
 
-    measure = jax.jit(lambda img: op.measure(img))
-    t0 = time.perf_counter()
-    measure.lower(x).compile()
-    c_meas = time.perf_counter() - t0
-    record(
-        "hdrjax statistics only (JGT key, white)",
-        lambda: jax.block_until_ready(measure(x)),
-        compile_s=c_meas,
-    )
-
-    exact = Reinhard2002(percentile_method="exact")
     if n <= 1024:
+        exact = Reinhard2002(percentile_method="exact")
         ex = jax.jit(lambda img: exact(img))
-        record(
-            "hdrjax reinhard2002 auto, exact percentiles",
-            lambda: ex(x).block_until_ready(),
-            repeats=3,
+        out.append(
+            H.record(
+                BENCH, case, "hdrjax (exact percentiles)", lambda: ex(x), repeats=3, compiled=True
+            )
         )
 
-    if not args.skip_peers:
-        record("NumPy float32 (same operator)", lambda: numpy_reinhard_auto(rgb), repeats=3)
+    measure = jax.jit(lambda img: op.measure(img))
+    c_meas = _compile_time(measure, x)
+    out.append(
+        H.record(
+            BENCH,
+            f"statistics only (JGT key, white) {n}x{n}",
+            "hdrjax",
+            lambda: measure(x),
+            repeats=reps,
+            compile_s=c_meas,
+            **common,
+        )
+    )
+
+    if not skip_peers:
+        out.append(
+            H.record(
+                BENCH,
+                case,
+                "NumPy float32 (same operator)",
+                lambda: numpy_reinhard_auto(rgb),
+                repeats=peer_reps,
+            )
+        )
         try:
             import cv2
 
             tm = cv2.createTonemapReinhard()
-            record("OpenCV createTonemapReinhard", lambda: tm.process(rgb), repeats=3)
+            out.append(
+                H.record(
+                    BENCH,
+                    case,
+                    "OpenCV createTonemapReinhard",
+                    lambda: tm.process(rgb),
+                    repeats=peer_reps,
+                )
+            )
         except ImportError:
             print("OpenCV not installed: skipped")
         try:
             from colour_hdri import tonemapping_operator_Reinhard2004
 
-            record(
-                "colour-hdri Reinhard2004",
-                lambda: tonemapping_operator_Reinhard2004(rgb),
-                repeats=3,
+            out.append(
+                H.record(
+                    BENCH,
+                    case,
+                    "colour-hdri Reinhard2004",
+                    lambda: tonemapping_operator_Reinhard2004(rgb),
+                    repeats=peer_reps,
+                )
             )
         except ImportError:
             print("colour-hdri not installed: skipped")
-
-    bound = results["bandwidth bound (np.copyto, 1 read + 1 write)"]["median_s"]
-    ours = results["hdrjax reinhard2002 auto"]["median_s"]
-    print(f"\nimage {n}x{n} RGB float32 ({mb:.0f} MB); ratios (time / hdrjax full call):")
-    for name, r in results.items():
-        print(f"  {name:<44s} {r['median_s'] / ours:6.2f}x")
-    print(f"hdrjax / bandwidth bound for two passes: {ours / (2 * bound):.2f}x")
-    meta = {
-        "date": time.strftime("%Y-%m-%d %H:%M"),
-        "machine": platform.platform(),
-        "processor": platform.processor(),
-        "cpus": os.cpu_count(),
-        "jax": jax.__version__,
-        "backend": jax.default_backend(),
-        "device": str(jax.devices()[0]),
-        "numpy": np.__version__,
-        "hdrjax": hdrjax.__version__,
-        "size": n,
-        "repeats": args.repeats,
-    }
-    os.makedirs(os.path.dirname(args.json) or ".", exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump({"meta": meta, "results": results}, f, indent=2)
-    print(f"wrote {args.json}")
+    return out
 
 
 if __name__ == "__main__":
-    main()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="1024×1024, 5 repeats")
+    ap.add_argument("--size", type=int, default=None, help="image side (default 4096, quick 1024)")
+    ap.add_argument("--repeats", type=int, default=None)
+    ap.add_argument("--skip-peers", action="store_true", help="hdrjax only")
+    a = ap.parse_args()
+    run(a.quick, size=a.size, repeats=a.repeats, skip_peers=a.skip_peers)

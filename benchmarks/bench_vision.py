@@ -1,14 +1,17 @@
 """Benchmark of hdrjax.vision on 2048×1024 panoramas, against a NumPy/SciPy peer.
 
-Run: ``.venv/bin/python benchmarks/bench_vision.py [--size 2048x1024] [--repeat 5]``.
-Everything is timed in this one process; compile time is reported separately (first call
-minus the best of the repeated calls). Figures:
+Run: ``.venv/bin/python benchmarks/bench_vision.py [--quick] [--size 2048x1024] [--repeat 5]``
+(quick mode: 1024×512, 3 repeats, no per-effect timings, four glare settings).
+Everything is timed in this one process; each figure is the median of the repeats after a
+warm-up call (the NumPy/SciPy peer: 3 runs, 1 in quick mode), and compile time is reported
+separately (first call minus the median). Figures:
 
 1. daylight scene, ``simulate(effects="auto")`` + tone mapping vs tone mapping alone (the
    analysis is the only added cost: no effect is selected, none is compiled);
 2. night scene with lamps, every effect (and each effect alone), vs the same pipeline in
    NumPy/SciPy (glare by ``scipy.signal.fftconvolve`` with the same kernel);
-3. glare accuracy vs kernel radius and FFT padding, against the full zero-padded kernel.
+3. glare accuracy vs kernel radius and FFT padding, against the full zero-padded kernel
+   (the default), as the accuracy/time curve ``vision glare (kernel radius, FFT grid)``.
 """
 
 import argparse
@@ -16,6 +19,7 @@ import math
 import os
 import time
 
+import _harness as H
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -27,26 +31,8 @@ from hdrjax.vision import _spencer1995
 from hdrjax.vision._photometry import rgb_to_xyz_matrix
 
 PANORAMA = hv.View(hfov=360.0, vfov=180.0, projection="equiangular")
-
-
-def block(x):
-    return jax.block_until_ready(x)
-
-
-def timed(fn, repeat):
-    """(first call seconds, best of ``repeat`` further calls).
-
-    The best, not the median: on a shared machine the other processes only ever add time.
-    """
-    t = time.perf_counter()
-    block(fn())
-    first = time.perf_counter() - t
-    runs = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        block(fn())
-        runs.append(time.perf_counter() - t)
-    return first, min(runs)
+BENCH = "vision"
+CURVE = "vision glare (kernel radius, FFT grid)"
 
 
 def scenes(h, w, seed=0):
@@ -152,91 +138,103 @@ def np_pipeline(rgb, view, kernel, K, m):
     return x * np.float32(m)
 
 
-# -- main -------------------------------------------------------------------------------
+# -- benchmark --------------------------------------------------------------------------
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", default="2048x1024", help="WxH (default 2048x1024)")
-    ap.add_argument("--repeat", type=int, default=5)
-    args = ap.parse_args()
-    W, H = (int(v) for v in args.size.lower().split("x"))
-    day, night = scenes(H, W)
+def run(quick: bool = False, *, size: str | None = None, repeat: int | None = None) -> list[dict]:
+    """Records of benchmark ``"vision"`` and the glare accuracy/time curve."""
+    W, H_ = (int(v) for v in (size or ("1024x512" if quick else "2048x1024")).lower().split("x"))
+    rep = repeat or (3 if quick else 5)
+    day, night = scenes(H_, W)
+    res = f"{W}x{H_}"
     print(
-        f"hdrjax.vision benchmark: {W}×{H} float32, 360°×180° panorama, "
-        f"{os.cpu_count()} CPU threads, jax {jax.__version__} ({jax.default_backend()})"
+        f"[vision] {res} float32, 360°×180° panorama, {os.cpu_count()} CPU threads, "
+        f"jax {jax.__version__} ({jax.default_backend()})"
     )
-    try:
-        print(f"load average {os.getloadavg()[0]:.1f} (other processes share the CPU)")
-    except OSError:
-        pass
+    out: list[dict] = []
 
-    # 1. daylight: auto selects nothing
+    # 1. daylight: auto selects nothing; the peer is tone mapping alone
     day_j = jnp.asarray(day)
     tm = jax.jit(lambda x: hdrjax.tonemap(x, method="reinhard2002"))
-    c_tm, t_tm = timed(lambda: tm(day_j), args.repeat)
-    print("\n1. Daylight scene (no effect selected)")
-    print(
-        f"   tonemap(reinhard2002) alone          {1e3 * t_tm:8.1f} ms"
-        f"  (compile {c_tm - t_tm:.2f} s)"
-    )
+    t_tm = H.measure(lambda: tm(day_j), rep)
     for label, view in (("360° panorama", PANORAMA), ("60° photograph", hv.View(hfov=60.0))):
-        rep = hv.analyze(day_j, view, scale=1.0)
-        assert rep.selected == (), rep
-        _, t_auto = timed(
-            lambda v=view: tm(hv.simulate(day_j, v, "auto", scale=1.0)[0]), args.repeat
-        )
-        print(
-            f"   simulate(auto) + tonemap, {label:<15} {1e3 * t_auto:6.1f} ms  (analysis "
-            f"+{1e3 * (t_auto - t_tm):.1f} ms, {t_auto / t_tm:.2f}× tone mapping alone)"
-        )
+        rep_d = hv.analyze(day_j, view, scale=1.0)
+        if rep_d.selected != ():
+            raise AssertionError(f"daylight {label}: auto selected {rep_d.selected}, expected none")
+        t_auto = H.measure(lambda v=view: tm(hv.simulate(day_j, v, "auto", scale=1.0)[0]), rep)
+        case = f"daylight {res}, {label}: simulate(auto) + tonemap"
+        out += [
+            H.record(BENCH, case, "hdrjax simulate(auto) + tonemap", timing=t_auto, compiled=True),
+            H.record(BENCH, case, "tonemap(reinhard2002) alone", timing=t_tm, compiled=True),
+        ]
 
     # 2. night: every effect
     night_j = jnp.asarray(night)
     rep_n = hv.analyze(night_j, PANORAMA, scale=1.0)
-    print(f"\n2. Night scene with lamps: auto selects {', '.join(rep_n.selected)}")
-    rv = PANORAMA.resolve(H, W)
-    t = time.perf_counter()
+    print(f"[vision] night scene with lamps: auto selects {', '.join(rep_n.selected)}")
+    rv = PANORAMA.resolve(H_, W)
+    t0 = time.perf_counter()
     step = hv.HumanVision.build(
-        (H, W),
+        (H_, W),
         rv,
         hv.EFFECTS,
         glare_variant=rep_n.glare_variant,
         acuity_levels=None,
         adaptation=rep_n.adaptation_global,
     )
-    build = time.perf_counter() - t
-    run = jax.jit(lambda s, x: s(x))
-    c_all, t_all = timed(lambda: run(step, night_j), args.repeat)
-    c_sim, t_sim = timed(lambda: hv.simulate(night_j, PANORAMA, "all", scale=1.0)[0], args.repeat)
-    print(f"   kernel + spectrum build (cached)    {1e3 * build:8.1f} ms")
-    print(
-        f"   all effects (HumanVision, jit)      {1e3 * t_all:8.1f} ms"
-        f"  (compile {c_all - t_all:.2f} s)"
-    )
-    print(f"   simulate('all') incl. analysis      {1e3 * t_sim:8.1f} ms")
-    for e in hv.EFFECTS:
-        s1 = hv.HumanVision.build(
-            (H, W), rv, (e,), glare_variant=rep_n.glare_variant, adaptation=rep_n.adaptation_global
+    build = time.perf_counter() - t0
+    out.append(
+        H.record(
+            BENCH,
+            f"night {res}: kernel + spectrum build",
+            "hdrjax",
+            timing=H.summarize([build]),
         )
-        c1, t1 = timed(lambda s1=s1: run(s1, night_j), max(2, args.repeat // 2))
-        print(f"     {e:<12}                      {1e3 * t1:8.1f} ms  (compile {c1 - t1:.2f} s)")
+    )
+    run_step = jax.jit(lambda s, x: s(x))
+    t_all = H.measure(lambda: run_step(step, night_j), rep)
+    t_sim = H.measure(lambda: hv.simulate(night_j, PANORAMA, "all", scale=1.0)[0], rep)
     K = step.acuity_levels
     kernel = _spencer1995.glare_kernel(rv, rep_n.glare_variant)
     m = float(hv.contrast_scale(rep_n.adaptation_global))
-    t = time.perf_counter()
-    peer = np_pipeline(night, rv, kernel, K, m)
-    t_np = time.perf_counter() - t
-    ours = np.asarray(run(step, night_j))
-    err = np.abs(ours - peer).max() / np.abs(peer).max()
-    print(
-        f"   NumPy/SciPy peer, same pipeline     {1e3 * t_np:8.1f} ms  "
-        f"(hdrjax {t_np / t_all:.2f}× faster; max diff {err:.1e} of max)"
-    )
+    peer_out = {}
 
-    # 3. glare accuracy vs kernel radius / padding
-    print("\n3. Glare (Spencer 1995, " + rep_n.glare_variant + ") accuracy vs kernel and padding")
-    print("   kernel            FFT grid      time ms   max rel err   scattered-light L1 err")
+    def peer_fn():
+        peer_out["x"] = np_pipeline(night, rv, kernel, K, m)
+        return peer_out["x"]
+
+    t_np = H.measure(peer_fn, 1 if quick else 3)
+    ours = np.asarray(run_step(step, night_j))
+    err = float(np.abs(ours - peer_out["x"]).max() / np.abs(peer_out["x"]).max())
+    case = f"night {res}: all effects"
+    out += [
+        H.record(
+            BENCH,
+            case,
+            "hdrjax HumanVision (jit)",
+            timing=t_all,
+            compiled=True,
+            max_diff_of_max=err,
+            effects=", ".join(hv.EFFECTS),
+        ),
+        H.record(BENCH, case, "hdrjax simulate('all') incl. analysis", timing=t_sim),
+        H.record(BENCH, case, "NumPy/SciPy (same pipeline)", timing=t_np),
+    ]
+    if not quick:
+        for e in hv.EFFECTS:
+            s1 = hv.HumanVision.build(
+                (H_, W),
+                rv,
+                (e,),
+                glare_variant=rep_n.glare_variant,
+                adaptation=rep_n.adaptation_global,
+            )
+            t1 = H.measure(lambda s1=s1: run_step(s1, night_j), max(2, rep // 2))
+            out.append(
+                H.record(BENCH, f"night {res}: {e} alone", "hdrjax", timing=t1, compiled=True)
+            )
+
+    # 3. glare accuracy vs kernel radius / padding, against the full zero-padded kernel
     ref = None
     rows = [
         (None, False),
@@ -248,23 +246,42 @@ def main():
         (5.0, False),
         (2.0, False),
     ]
+    if quick:
+        rows = [(None, False), (None, True), (20.0, False), (5.0, False)]
     g = jax.jit(_spencer1995.apply_glare, static_argnums=2)
     for radius, circular in rows:
-        spec, size = _spencer1995.glare_spectrum(
+        spec, fft = _spencer1995.glare_spectrum(
             rv, rep_n.glare_variant, radius_deg=radius, circular=circular
         )
-        _, tg = timed(lambda s=spec, z=size: g(night_j, s, z), max(2, args.repeat // 2))
-        out = np.asarray(g(night_j, spec, size), np.float64)
+        tg = H.measure(lambda s=spec, z=fft: g(night_j, s, z), max(2, rep // 2))
+        got = np.asarray(g(night_j, spec, fft), np.float64)
         if ref is None:
-            ref = out
-        rel = np.abs(out - ref) / np.maximum(ref, 1e-30)
-        scat = np.abs(out - ref).sum() / np.abs(ref - night).sum()
+            ref = got
+        rel = np.abs(got - ref) / np.maximum(ref, 1e-30)
+        scat = float(np.abs(got - ref).sum() / np.abs(ref - night).sum())
         name = ("full" if radius is None else f"{radius:g}°") + (" circular" if circular else "")
-        print(
-            f"   {name:<17} {size[0]:>5}×{size[1]:<6}  {1e3 * tg:8.1f}"
-            f"   {rel.max():10.2e}   {scat:10.2e}"
+        out.append(
+            H.accuracy_point(
+                CURVE,
+                name,
+                scat,
+                tg["median_s"],
+                default=radius is None and not circular,
+                error_kind="L1 error of the scattered light vs full zero-padded kernel",
+                fft_grid=f"{fft[0]}x{fft[1]}",
+                max_rel_err=float(rel.max()),
+                compile_s=max(tg["first_s"] - tg["median_s"], 0.0),
+                image=res,
+                variant=rep_n.glare_variant,
+            )
         )
+    return out
 
 
 if __name__ == "__main__":
-    main()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="1024×512, 3 repeats, fewer settings")
+    ap.add_argument("--size", default=None, help="WxH (default 2048x1024)")
+    ap.add_argument("--repeat", type=int, default=None)
+    a = ap.parse_args()
+    run(a.quick, size=a.size, repeat=a.repeat)

@@ -2,8 +2,8 @@
 
 Luminance is the Y row of the RGB→XYZ matrix of the image's primaries and white point
 (Rec.709/sRGB with D65 unless the file says otherwise, e.g. an EXR ``chromaticities``
-attribute). The matrix is derived by colour-science (``normalised_primary_matrix``), the
-same construction as OpenEXR's ``RGBtoXYZ``.
+attribute). The matrix is SMPTE RP 177's (:func:`normalised_primary_matrix`), the same
+construction as OpenEXR's ``RGBtoXYZ`` and colour-science's, which the tests compare with.
 """
 
 from collections.abc import Sequence
@@ -17,6 +17,21 @@ REC709_CHROMATICITIES: tuple[float, ...] = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 
 
 REC709_WEIGHTS: tuple[float, float, float] = (0.2126, 0.7152, 0.0722)
 """Rec.709 luminance weights (ITU-R BT.709-6, item 3.2), as the standard rounds them."""
+
+
+def normalised_primary_matrix(chromaticities: Sequence[float]) -> np.ndarray:
+    """RGB→XYZ matrix of primaries and white ``(x_r, y_r, x_g, y_g, x_b, y_b, x_w, y_w)``.
+
+    SMPTE RP 177-1993 (3.3): the primaries' XYZ (``Y = 1``) as columns, each scaled so that
+    RGB = (1, 1, 1) maps to the white point with ``Y_w = 1``. Equal to colour-science's
+    ``normalised_primary_matrix`` (tested); written here because ``import colour`` costs
+    about 3 s, more than the command line's whole start-up budget.
+    """
+    c = np.asarray(chromaticities, dtype=np.float64).reshape(4, 2)
+    x, y = c[:, 0], c[:, 1]
+    xyz = np.stack([x / y, np.ones_like(x), (1.0 - x - y) / y])  # columns: r, g, b, white
+    scale = np.linalg.solve(xyz[:, :3], xyz[:, 3])
+    return xyz[:, :3] * scale
 
 
 def luminance_weights(chromaticities: Sequence[float] | None = None) -> tuple[float, float, float]:
@@ -44,11 +59,9 @@ def luminance_weights(chromaticities: Sequence[float] | None = None) -> tuple[fl
         )
     if np.allclose(c, REC709_CHROMATICITIES, atol=1e-4):
         return REC709_WEIGHTS
-    import colour  # slow import, only needed for non-standard primaries
-
     try:
         with np.errstate(all="raise"):
-            npm = colour.normalised_primary_matrix(c[:6].reshape(3, 2), c[6:])
+            npm = normalised_primary_matrix(c)
     except (np.linalg.LinAlgError, FloatingPointError) as e:
         raise ValueError(f"chromaticities {c.tolist()} are degenerate: {e}") from None
     w = npm[1]

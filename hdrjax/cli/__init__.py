@@ -17,8 +17,16 @@ from ._common import CLIError, DataError, UsageError
 __all__ = ["CLIError", "DataError", "UsageError", "build_parser", "main"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the command line's error form: one line on stderr, exit status 2
+    (argparse's default prints the whole usage block first)."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="hdrjax",
         description="HDR tone mapping and analysis for lighting simulation and photography.",
     )
@@ -41,7 +49,9 @@ def _enable_compilation_cache() -> None:
     try:
         os.makedirs(path, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", path)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+        # every executable, however quick to compile: a warm start then compiles nothing
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     except OSError:
         pass  # an unwritable cache folder only costs compile time
 
@@ -57,3 +67,15 @@ def main(argv: list[str] | None = None) -> int:
         return e.exit_code
     except KeyboardInterrupt:
         return 130
+    except (OSError, ValueError) as e:
+        # what a subcommand did not translate: file-system failures (permissions, a full
+        # disk) and validation errors from the library; still one line, never a traceback
+        print(f"hdrjax {args.command}: error: {_one_line(e)}", file=sys.stderr)
+        return 1
+
+
+def _one_line(e: BaseException) -> str:
+    text = " ".join(str(e).split()) or type(e).__name__
+    if isinstance(e, OSError) and e.filename and str(e.filename) not in text:
+        text = f"{e.filename}: {text}"
+    return text

@@ -99,3 +99,22 @@ def test_encoding_clips_and_quantizes():
         encode(x, "pq")
     g = jax.grad(lambda v: jnp.sum(srgb_encode(v)))(jnp.array([0.0, 0.001, 0.5, 2.0]))
     assert np.all(np.isfinite(np.asarray(g)))
+
+
+@pytest.mark.parametrize(
+    "chroma",
+    [
+        (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290),  # Rec.709 / D65
+        (0.640, 0.330, 0.290, 0.600, 0.150, 0.060, 1 / 3, 1 / 3),  # Radiance's standard
+        (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767),  # ACES AP0
+        (0.680, 0.320, 0.265, 0.690, 0.150, 0.060, 0.3127, 0.3290),  # Display P3
+    ],
+)
+def test_primary_matrix_equals_colour_science(chroma):
+    import colour
+
+    from hdrjax._colour import normalised_primary_matrix
+
+    c = np.asarray(chroma)
+    ref = colour.normalised_primary_matrix(c[:6].reshape(3, 2), c[6:])
+    np.testing.assert_allclose(normalised_primary_matrix(c), ref, rtol=1e-12, atol=1e-15)
