@@ -69,7 +69,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from . import (
-        _stats as stats,
+        _stats as stats,  # noqa: F401  (public name: hdrjax.stats)
         batch as batch,
         display as display,
         estimate as estimate,

@@ -13,8 +13,9 @@ def register(subparsers) -> None:
         "info",
         help="print size, layers, luminance statistics and estimated operator parameters",
         description="Describe an HDR image: size, channels and layers, luminance statistics "
-        "(min, percentiles, log-average, max, dynamic range in stops) and the parameters "
-        "each operator would estimate from it.",
+        "(min, percentiles, log-average, max, dynamic range in stops), the parameters "
+        "each operator would estimate from it, and each automatic estimate "
+        "(hdrjax.estimate) with the statistics it used.",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr or .pfm")
     p.add_argument(
@@ -93,5 +94,35 @@ def run(args: argparse.Namespace) -> int:
         f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
         f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)"
     )
+    print_estimates(jnp.asarray(rgb), wts, method)
     print("operators: " + ", ".join(operator_names()))
     return 0
+
+
+def print_estimates(rgb, weights, method: str) -> None:
+    """Each :mod:`hdrjax.estimate` value and the statistics it was computed from."""
+    from .. import estimate as E
+
+    print("automatic estimates (value; the statistics it used):")
+    rows = (
+        (E.jgt_key(rgb, percentile_method=method, weights=weights), ""),
+        (E.jgt_white(rgb, percentile_method=method, weights=weights), " (scaled units)"),
+        (E.log_average(rgb, weights=weights), ""),
+        (E.adaptation_luminance(rgb, weights=weights), ""),
+        (E.adaptation_luminance(rgb, robust=True, weights=weights), ""),
+        (E.desaturation_threshold(rgb, method=method, weights=weights), ""),
+    )
+    for est, unit in rows:
+        stats = ", ".join(f"{k} {_fmt(v)}" for k, v in est.statistics.items())
+        print(f"  {est.name}: {_fmt(est.value)}{unit}   ({stats})")
+
+
+def _fmt(v) -> str:
+    import numpy as np
+
+    v = np.asarray(v)
+    if v.dtype == bool:
+        return "yes" if bool(v) else "no"
+    if np.issubdtype(v.dtype, np.integer):
+        return str(int(v))
+    return f"{float(v):.6g}"

@@ -5,6 +5,7 @@ import json
 import os
 import time
 
+from ..io._atomic import atomic_path, atomic_write_bytes
 from ._common import DataError, UsageError, positive_float
 
 OVERLAY_EXT = (".png", ".jpg", ".jpeg", ".pdf", ".svg")
@@ -209,8 +210,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json_path:
         try:
             os.makedirs(os.path.dirname(os.path.abspath(args.json_path)), exist_ok=True)
-            with open(args.json_path, "w") as f:
-                json.dump(doc, f, indent=2)
+            atomic_write_bytes(args.json_path, json.dumps(doc, indent=2).encode())
         except OSError as e:
             raise DataError(f"{args.json_path}: cannot write ({e.strerror or e})") from None
     if args.output:
@@ -222,7 +222,9 @@ def run(args: argparse.Namespace) -> int:
         ax = hl.plot_lights(rgb, res)
         try:
             os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
-            ax.figure.savefig(args.output, dpi=100, bbox_inches="tight", pad_inches=0)
+            fmt = os.path.splitext(args.output)[1].lstrip(".").lower()
+            with atomic_path(args.output) as tmp:
+                ax.figure.savefig(tmp, format=fmt, dpi=100, bbox_inches="tight", pad_inches=0)
         except OSError as e:
             raise DataError(f"{args.output}: cannot write ({e.strerror or e})") from None
         finally:

@@ -28,13 +28,7 @@ def register(subparsers) -> None:
         "(Reinhard 2002 JGT key and white point, log-average adaptation luminance).",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
-    p.add_argument(
-        "-o",
-        "--output",
-        required=True,
-        help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
-        "(display-referred linear)",
-    )
+    add_output_argument(p)
     p.add_argument(
         "--method",
         default="reinhard2002",
@@ -75,6 +69,24 @@ def register(subparsers) -> None:
         default=1.0,
         help="multiply the input by this factor first (e.g. to cd/m²)",
     )
+    add_encoding_arguments(p)
+    p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
+    p.set_defaults(func=run)
+
+
+def add_output_argument(p: argparse.ArgumentParser) -> None:
+    """``-o/--output`` (shared with ``hdrjax fit``)."""
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
+        "(display-referred linear)",
+    )
+
+
+def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
+    """``--transfer``, ``--gamma``, ``--bits``: how :func:`write_output` encodes."""
     p.add_argument(
         "--transfer",
         choices=("srgb", "gamma", "linear"),
@@ -83,8 +95,49 @@ def register(subparsers) -> None:
     )
     p.add_argument("--gamma", type=positive_float, default=2.2, help="for --transfer gamma")
     p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
-    p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
-    p.set_defaults(func=run)
+
+
+def check_output(args: argparse.Namespace) -> str:
+    """Validate ``args.output`` against the encoding options; returns its extension."""
+    ext = os.path.splitext(args.output)[1].lower()
+    if ext not in LDR_EXT + HDR_EXT:
+        raise UsageError(
+            f"{args.output}: unsupported output type {ext or '(none)'};"
+            f" expected one of {', '.join(LDR_EXT + HDR_EXT)}"
+        )
+    if args.bits == 16 and ext in (".jpg", ".jpeg"):
+        raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
+    return ext
+
+
+def encode_output(args: argparse.Namespace, display):
+    """Display-referred linear RGB → the array written to ``args.output`` (NumPy): encoded
+    for .png/.jpg/.tif, linear float for .exr/.hdr/.pfm."""
+    import jax
+    import numpy as np
+
+    from ..display import encode
+
+    out = display
+    if os.path.splitext(args.output)[1].lower() in LDR_EXT:
+        out = encode(out, args.transfer, gamma=args.gamma)
+    return np.asarray(jax.block_until_ready(out))
+
+
+def write_output(args: argparse.Namespace, encoded) -> None:
+    """Write :func:`encode_output`'s array to ``args.output`` (atomic); errors → DataError."""
+    import numpy as np
+
+    from .. import io as hio
+    from ..display import quantize
+
+    try:
+        if os.path.splitext(args.output)[1].lower() in LDR_EXT:
+            hio.write_display(args.output, quantize(encoded, args.bits), bits=args.bits)
+        else:
+            hio.write(args.output, encoded.astype(np.float32))
+    except (ValueError, OSError) as e:
+        raise DataError(f"{args.output}: cannot write: {e}") from None
 
 
 def build_operator(args: argparse.Namespace):
@@ -155,46 +208,24 @@ def load_rgb(path: str, scale: float = 1.0):
 
 
 def run(args: argparse.Namespace) -> int:
-    ext = os.path.splitext(args.output)[1].lower()
-    if ext not in LDR_EXT + HDR_EXT:
-        raise UsageError(
-            f"{args.output}: unsupported output type {ext or '(none)'};"
-            f" expected one of {', '.join(LDR_EXT + HDR_EXT)}"
-        )
-    if args.bits == 16 and ext in (".jpg", ".jpeg"):
-        raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
+    check_output(args)
     op = build_operator(args)
     t0 = time.perf_counter()
     img, rgb = load_rgb(args.input, args.scale)
     t_read = time.perf_counter() - t0
 
-    import dataclasses
-
-    import jax
     import numpy as np
 
-    from .. import io as hio
-    from ..display import encode, quantize
     from ..operators._base import _apply_jit
 
-    if "weights" in {f.name for f in dataclasses.fields(op)}:
-        op = dataclasses.replace(op, weights=img.luminance_weights)
+    op = with_file_weights(op, img)
     t1 = time.perf_counter()
     measured = eqx_jit_measure(op, rgb)
-    out = _apply_jit(measured, rgb)
-    if ext in LDR_EXT:
-        out = encode(out, args.transfer, gamma=args.gamma)
-    out = np.asarray(jax.block_until_ready(out))
+    out = encode_output(args, _apply_jit(measured, rgb))
     t_map = time.perf_counter() - t1
     n_bad = int(np.count_nonzero(~np.all(np.isfinite(rgb), axis=-1)))
     t2 = time.perf_counter()
-    try:
-        if ext in LDR_EXT:
-            hio.write_display(args.output, quantize(out, args.bits), bits=args.bits)
-        else:
-            hio.write(args.output, out.astype(np.float32))
-    except (ValueError, OSError) as e:
-        raise DataError(f"{args.output}: cannot write: {e}") from None
+    write_output(args, out)
     t_write = time.perf_counter() - t2
     h, w = rgb.shape[:2]
     print(f"input: {args.input} ({w}x{h})")
@@ -207,6 +238,15 @@ def run(args: argparse.Namespace) -> int:
             f"time: read {t_read:.3f}s, tone map {t_map:.3f}s (incl. compile), write {t_write:.3f}s"
         )
     return 0
+
+
+def with_file_weights(op, img):
+    """The operator with the file's luminance weights (operators that have a setting)."""
+    import dataclasses
+
+    if "weights" in {f.name for f in dataclasses.fields(op)}:
+        op = dataclasses.replace(op, weights=img.luminance_weights)
+    return op
 
 
 def eqx_jit_measure(op, rgb):

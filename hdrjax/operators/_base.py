@@ -26,7 +26,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._colour import REC709_WEIGHTS, luminance
-from .._stats import DEFAULT_BINS, LuminanceStats, measure
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, measure
 
 _Op = TypeVar("_Op", bound="AbstractOperator")
 
@@ -191,9 +191,22 @@ class AbstractOperator(eqx.Module):
         return out
 
 
-def stats_of(p: Prepared, *, method: str = "histogram", bins: int = DEFAULT_BINS) -> LuminanceStats:
-    """Statistics of a prepared image (its finite pixels); unused ones are removed by XLA."""
-    return measure(p.L_stats, method=method, bins=bins, assume_finite=p.clean)  # type: ignore
+def stats_of(
+    p: Prepared,
+    *,
+    method: str = "histogram",
+    bins: int = DEFAULT_BINS,
+    delta: float = DEFAULT_DELTA,
+) -> LuminanceStats:
+    """Statistics of a prepared image (its finite pixels); unused ones are removed by XLA.
+    ``delta`` is the offset inside the paper's log-average (:func:`hdrjax.stats.measure`)."""
+    return measure(
+        p.L_stats,
+        delta=delta,
+        method=method,  # type: ignore[arg-type]
+        bins=bins,
+        assume_finite=p.clean,
+    )
 
 
 # ----------------------------------------------------------------------------- registry

@@ -49,18 +49,26 @@ def jgt_key(st: LuminanceStats) -> Array:
     return jnp.where(ok, KEY_DEFAULT * jnp.power(4.0, expo), KEY_DEFAULT)
 
 
-def jgt_white(st: LuminanceStats, scale: Array) -> Array:
-    """JGT 2002 Eq. 5 white point (scaled units) from the full range, with hdritools' guard.
-
-    ``scale`` is ``a / L̄_w``, the factor from world to scaled luminance.
-    """
+def jgt_white_terms(st: LuminanceStats, scale: Array) -> tuple[Array, dict[str, Array]]:
+    """:func:`jgt_white` and the intermediate terms it used: ``zones``
+    (``log2 L_max − log2 L_min``) and ``guard`` (True where hdritools' guard chose
+    ``1.5 · max(L)`` in scaled units over Eq. 5)."""
     any_pos = st.n_positive > 0
     L_max = jnp.where(any_pos & (st.max > 0), st.max, 1.0)  # safe for log and its gradient
     zones = jnp.log2(L_max) - jnp.log2(st.min_positive)  # no overflow of the ratio
     eq5 = 1.5 * jnp.exp2(jnp.minimum(zones - 5.0, 100.0))  # 2^100: finite in float32
     guard = zones <= jnp.log2(st.log_average_trimmed) + 4.415037
     white = jnp.where(guard, 1.5 * L_max * scale, eq5)
-    return jnp.where(any_pos, jnp.maximum(white, jnp.finfo(white.dtype).tiny), 1.0)
+    white = jnp.where(any_pos, jnp.maximum(white, jnp.finfo(white.dtype).tiny), 1.0)
+    return white, {"zones": zones, "guard": guard}
+
+
+def jgt_white(st: LuminanceStats, scale: Array) -> Array:
+    """JGT 2002 Eq. 5 white point (scaled units) from the full range, with hdritools' guard.
+
+    ``scale`` is ``a / L̄_w``, the factor from world to scaled luminance.
+    """
+    return jgt_white_terms(st, scale)[0]
 
 
 def reinhard_curve(L: Array, L_white: Array) -> Array:
@@ -98,7 +106,7 @@ class Reinhard2002(AbstractLuminanceCurve):
     def _measure(self, p: Prepared) -> "Reinhard2002":
         if not self.unset():
             return self
-        st = stats_of(p, method=self.percentile_method, bins=self.bins)
+        st = stats_of(p, method=self.percentile_method, bins=self.bins, delta=self.delta)
         lbar = st.log_average if self.log_average is None else self.log_average
         key = jgt_key(st) if self.key is None else self.key
         white = self.L_white
@@ -114,4 +122,11 @@ class Reinhard2002(AbstractLuminanceCurve):
         return reinhard_curve((self.key / self.log_average) * L, self.L_white)
 
 
-__all__ = ["KEY_DEFAULT", "Reinhard2002", "jgt_key", "jgt_white", "reinhard_curve"]
+__all__ = [
+    "KEY_DEFAULT",
+    "Reinhard2002",
+    "jgt_key",
+    "jgt_white",
+    "jgt_white_terms",
+    "reinhard_curve",
+]

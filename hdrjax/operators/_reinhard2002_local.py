@@ -128,7 +128,7 @@ class Reinhard2002Local(AbstractOperator):
     def _measure(self, p: Prepared) -> "Reinhard2002Local":
         if not self.unset():
             return self
-        st = stats_of(p, method=self.percentile_method, bins=self.bins)
+        st = stats_of(p, method=self.percentile_method, bins=self.bins, delta=self.delta)
         key = jgt_key(st) if self.key is None else self.key
         lbar = st.log_average if self.log_average is None else self.log_average
         return eqx.tree_at(

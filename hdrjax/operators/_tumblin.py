@@ -28,6 +28,7 @@ from jaxtyping import Array
 from ._base import (
     AbstractLuminanceCurve,
     Prepared,
+    count_valid,
     log_average,
     max_luminance,
     param,
@@ -61,17 +62,27 @@ def tumblin_curve(
     return m * L_da * powed
 
 
+def adaptation_terms(p: Prepared, method: str, bins: int) -> tuple[Array, dict[str, Array]]:
+    """:func:`adaptation_luminance` and the statistics it used: ``n_pixels`` (the pixels
+    averaged) and, for ``"trimmed"``, ``p01``/``p99`` (the kept range) and their
+    ``rel_error_bound`` (histogram percentiles)."""
+    if method == "log_average":
+        return log_average(p, STEVENS_EPS), {"n_pixels": count_valid(p)}
+    st = stats_of(p, bins=bins)
+    keep = p.valid() & (p.L >= st.p01) & (p.L <= st.p99) & (p.L > 0)
+    lnL = safe_log(p.L)
+    n_kept = jnp.sum(keep)
+    n = jnp.maximum(n_kept, 1)
+    value = jnp.where(jnp.any(keep), jnp.exp(jnp.sum(jnp.where(keep, lnL, 0.0)) / n), 1.0)
+    terms = {"n_pixels": n_kept, "p01": st.p01, "p99": st.p99}
+    return value, {**terms, "rel_error_bound": st.rel_error_bound}
+
+
 def adaptation_luminance(p: Prepared, method: str, bins: int) -> Array:
     """World adaptation luminance: ``exp(mean(ln(L + 2.3e-5)))`` over finite pixels
     (colour-hdri, HDR Toolbox), or ``"trimmed"``: the log-average of the positive pixels
     between the 1st and 99th percentiles (robust to a few lamps or dark corners)."""
-    if method == "log_average":
-        return log_average(p, STEVENS_EPS)
-    st = stats_of(p, bins=bins)
-    keep = p.valid() & (p.L >= st.p01) & (p.L <= st.p99) & (p.L > 0)
-    lnL = safe_log(p.L)
-    n = jnp.maximum(jnp.sum(keep), 1)
-    return jnp.where(jnp.any(keep), jnp.exp(jnp.sum(jnp.where(keep, lnL, 0.0)) / n), 1.0)
+    return adaptation_terms(p, method, bins)[0]
 
 
 _ADAPT = ("log_average", "trimmed")
@@ -176,4 +187,12 @@ class TumblinReinhard(_AbstractTumblin):
         return reinhard_curve(L_d / self.L_dmax, self.L_white)
 
 
-__all__ = ["Tumblin1999", "TumblinReinhard", "stevens_gamma", "tumblin_curve"]
+__all__ = [
+    "STEVENS_EPS",
+    "Tumblin1999",
+    "TumblinReinhard",
+    "adaptation_luminance",
+    "adaptation_terms",
+    "stevens_gamma",
+    "tumblin_curve",
+]

@@ -72,9 +72,15 @@ def sample_bilinear(
         fx = jnp.where((xc > w - 1.0)[..., None], 1.0, fx)
         x0 = jnp.clip(x0, 0, w - 1)
         x1 = jnp.clip(x1, 0, w - 1)
-    top = img[y0, x0] * (1 - fx) + img[y0, x1] * fx
-    bottom = img[y1, x0] * (1 - fx) + img[y1, x1] * fx
-    return top * (1 - fy) + bottom * fy
+    top = _lerp(img[y0, x0], img[y0, x1], fx)
+    bottom = _lerp(img[y1, x0], img[y1, x1], fx)
+    return _lerp(top, bottom, fy)
+
+
+def _lerp(a: Array, b: Array, f: Array) -> Array:
+    """``a (1 - f) + b f``, exactly ``a`` at ``f = 0`` and ``b`` at ``f = 1``: a NaN/Inf
+    neighbour with zero weight does not reach the sample (``0 · NaN`` would)."""
+    return jnp.where(f == 0, a, jnp.where(f == 1, b, a * (1 - f) + b * f))
 
 
 def _centres(n: int) -> Array:

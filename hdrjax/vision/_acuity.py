@@ -47,7 +47,8 @@ def max_levels(view: ResolvedView, L_min: float = LMIN) -> int:
 
     ``ceil(log2(ppd / R(L_min)))``, at most the level where the image is one block.
     """
-    s = pixels_per_degree(view) / float(acuity(max(L_min, LMIN)))
+    with jax.ensure_compile_time_eval():  # a Python number even inside a jax.jit trace
+        s = pixels_per_degree(view) / float(acuity(max(L_min, LMIN)))
     need = max(0, math.ceil(math.log2(max(s, 1.0))))
     cap = max(0, math.ceil(math.log2(max(view.height, view.width))))
     return min(need, cap)

@@ -233,8 +233,10 @@ def _spectrum_cached(
 ) -> tuple[Array, tuple[int, int]]:
     ry, rx = kernel_radius(view, radius_deg)
     size = _fft.fft_size(view.height, view.width, ry, rx, circular=circular)
-    spec = _fft.kernel_spectrum(glare_kernel(view, variant, radius_deg=radius_deg), size)  # type: ignore[arg-type]
-    return jnp.asarray(spec.astype(dtype)), size
+    # concrete even when first called inside jax.jit/vmap: a cached tracer would leak
+    with jax.ensure_compile_time_eval():
+        spec = _fft.kernel_spectrum(glare_kernel(view, variant, radius_deg=radius_deg), size)  # type: ignore[arg-type]
+        return jnp.asarray(spec.astype(dtype)), size
 
 
 def glare_spectrum(
