@@ -391,3 +391,17 @@ def test_filter_command_writes_the_library_result(tmp_path):
         == 2
     )
     assert not os.path.exists(tmp_path / "g.png")
+
+
+@pytest.mark.parametrize("criterion", ["luminance", "channels"])
+def test_batched_and_vmapped_medians_of_strip_sized_images_equal_a_loop(criterion):
+    # ≥ 64 rows takes the strip path, whose dynamic slices once mixed int32/int64 under vmap
+    x = np.random.default_rng(3).lognormal(0, 2, (2, 130, 96, 3)).astype(np.float32)
+    loop = np.stack([np.asarray(median_filter(a, 5, criterion=criterion)) for a in x])
+    batched = np.asarray(median_filter(x, 5, criterion=criterion))
+    vmapped = np.asarray(jax.vmap(lambda a: median_filter(a, 5, criterion=criterion))(x))
+    np.testing.assert_array_equal(batched, loop)
+    np.testing.assert_array_equal(vmapped, loop)
+    ref = ndi.median_filter(x[0, ..., 1], size=5, mode="nearest")
+    if criterion == "channels":
+        np.testing.assert_array_equal(loop[0, ..., 1], ref)

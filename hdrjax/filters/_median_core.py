@@ -174,8 +174,8 @@ def _engine(
     bands = [(0, r, 0, w), (b0, h, 0, w), (r, b0, 0, r), (r, b0, w - r, w)]
     band_vals = _bands(block_keys, k, bands, finish)
 
-    def start(i):  # first output row of strip i
-        return r + i * R
+    def start(i):  # first output row of strip i (int32: vmap's scatter clamps in one dtype)
+        return jnp.asarray(r + i * R, jnp.int32)
 
     def pairs(keys):  # packed medians of the R output rows whose key rows are `keys`
         a, b = _pair_keys(keys, k, R // 2, wi)
@@ -190,16 +190,18 @@ def _engine(
         out, prev, keys = carry
         nxt = strip_keys(start(jnp.minimum(i + 1, n - 1)), R)
         cur = pairs(keys)
-        at = (start(jnp.maximum(i - 1, 0)), r)
+        at = (start(jnp.maximum(i - 1, 0)), jnp.int32(r))
         out = jax.lax.dynamic_update_slice(out, _unpack(prev, out_dtype), at)
         return out, cur, nxt
 
     # iteration 0 stores the zero `prev` over strip 0; iteration 1 stores the real one
     init = (jnp.zeros((h, w), out_dtype), jnp.zeros((R // 2, wi), cdt), strip_keys(start(0), R))
     out, last, _ = jax.lax.fori_loop(0, n, body, init)
-    out = jax.lax.dynamic_update_slice(out, _unpack(last, out_dtype), (start(n - 1), r))
+    out = jax.lax.dynamic_update_slice(
+        out, _unpack(last, out_dtype), (start(n - 1), jnp.int32(r))
+    )
     for (r0, _, c0, _), vals in zip(bands, band_vals, strict=True):
-        out = jax.lax.dynamic_update_slice(out, vals, (r0, c0))
+        out = jax.lax.dynamic_update_slice(out, vals, (jnp.int32(r0), jnp.int32(c0)))
     return out
 
 

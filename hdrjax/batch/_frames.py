@@ -1,0 +1,219 @@
+"""Frame I/O and the batched work on a group of frames, shared by the in-process runner and
+the Dask tasks (both go through :func:`dispatch_render` and :func:`measure_frames`, so their
+outputs are byte-identical).
+
+Every compiled call sees exactly ``batch_size`` frames of one shape: a short group is padded
+with copies of its last frame (the copies are computed and dropped), so one compilation
+serves every batch of a shape, and a frame gives the same bytes whichever batch it lands in
+(its result does not depend on the other frames of the compiled call)."""
+
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import io as hio
+from ._pipeline import Pipeline, frame_is_clean, render_batch
+from ._sequence import measure_batch, merge_histograms, stack_operators
+
+
+class FrameError(ValueError):
+    """A frame that cannot be processed (unreadable file, NaN pixels, failed write)."""
+
+
+def read_frame(path: str | os.PathLike, *, allow_nan: bool = False) -> tuple[np.ndarray, tuple]:
+    """Linear RGB ``(H, W, 3)`` float32 and the luminance weights of a frame file.
+
+    The file is read once (an EXR's parts all come from the one open file); sidecar files
+    are not looked up. Raises :class:`FrameError` naming the file.
+    """
+    name = os.fspath(path)
+    try:
+        img = hio.read(path, sidecars=False)
+        rgb = np.ascontiguousarray(img.rgb(), np.float32)
+        weights = tuple(float(w) for w in img.luminance_weights)
+    except (ValueError, OSError, KeyError, IndexError, EOFError) as e:
+        msg = str(e) or type(e).__name__
+        raise FrameError(msg if os.path.basename(name) in msg else f"{name}: {msg}") from None
+    if not allow_nan:
+        n_nan = int(np.count_nonzero(np.isnan(rgb).any(axis=-1)))
+        if n_nan:
+            raise FrameError(
+                f"{name}: {n_nan} of {rgb.shape[0] * rgb.shape[1]} pixel(s) are NaN "
+                "(pass allow_nan=True / --allow-nan to render them black)"
+            )
+    return rgb, weights
+
+
+def write_frame(pipeline: Pipeline, data: np.ndarray, out: str | os.PathLike) -> None:
+    """Write one pipeline output atomically (``FrameError`` on failure)."""
+    try:
+        if pipeline.encoded:
+            hio.write_display(out, data, bits=pipeline.bits)
+        else:
+            hio.write(out, np.asarray(data, np.float32))
+    except (ValueError, OSError) as e:
+        raise FrameError(f"{out}: cannot write: {e}") from None
+
+
+def _padded(frames: Sequence[np.ndarray], batch_size: int) -> np.ndarray:
+    frames = list(frames)
+    frames += [frames[-1]] * (batch_size - len(frames))
+    return np.stack(frames)
+
+
+def group_key(rgb: np.ndarray, weights: tuple) -> tuple:
+    """Frames that can share one compiled batch: same shape, luminance weights and
+    cleanliness (all pixels finite, :func:`~hdrjax.batch.frame_is_clean`)."""
+    return (rgb.shape, weights, frame_is_clean(rgb))
+
+
+def dispatch_render(
+    pipeline: Pipeline,
+    frames: Sequence[np.ndarray],
+    key: tuple,
+    values: Sequence[dict] | None,
+    batch_size: int,
+) -> Any:
+    """Start the compiled pipeline on up to ``batch_size`` equal-shape frames.
+
+    ``key``: the frames' :func:`group_key`. ``values``: per-frame parameters (sequence
+    modes) or ``None`` (measured per frame).
+    Returns the device array (asynchronous); its first ``len(frames)`` entries are the
+    outputs.
+    """
+    n = len(frames)
+    if not 1 <= n <= batch_size:
+        raise ValueError(f"frames: expected 1..{batch_size} frames, got {n}")
+    _, weights, clean = key
+    p = pipeline.with_weights(weights)
+    ops = None
+    if values is not None:
+        vals = list(values) + [values[-1]] * (batch_size - n)
+        ops = stack_operators(p.operator, vals)
+    return render_batch(p, ops, _padded(frames, batch_size), clean)
+
+
+def measure_frames(
+    pipeline: Pipeline, frames: Sequence[np.ndarray], key: tuple, batch_size: int, pooled: bool
+) -> list[dict]:
+    """Per-frame measurement records (``hdrjax.batch._sequence.measure_batch``) of frames
+    sharing the :func:`group_key` ``key``."""
+    _, weights, clean = key
+    p = pipeline.with_weights(weights)
+    return measure_batch(p, _padded(frames, batch_size), pooled, clean)[: len(frames)]
+
+
+# ------------------------------------------------------------------------- Dask tasks
+
+
+_IO_THREADS = 2  # file reading and PNG compression release the GIL for the most part
+
+
+def _read_or_error(path: str, allow_nan: bool):
+    try:
+        return read_frame(path, allow_nan=allow_nan)
+    except FrameError as e:
+        return e
+
+
+def _groups(items, allow_nan):
+    """Read ``items`` (``(index, path, ...)``, in threads) and group them by shape;
+    failures listed apart."""
+    groups: dict[tuple, list] = {}
+    failed: dict[int, str] = {}
+    with ThreadPoolExecutor(_IO_THREADS) as ex:
+        results = list(ex.map(lambda it: _read_or_error(it[1], allow_nan), items))
+    for item, res in zip(items, results, strict=True):
+        if isinstance(res, FrameError):
+            failed[item[0]] = str(res)
+            continue
+        rgb, w = res
+        groups.setdefault(group_key(rgb, w), []).append((item, rgb, w))
+    return groups, failed
+
+
+def measure_task(
+    items: Sequence[tuple[int, str]],
+    pipeline: Pipeline,
+    batch_size: int,
+    pooled: bool,
+    allow_nan: bool,
+) -> dict:
+    """Dask task: measure a chunk. Returns ``{"records": {index: record}, "hist": ...,
+    "failed": {index: message}}`` (the chunk's histograms already summed)."""
+    groups, failed = _groups(items, allow_nan)
+    records: dict[int, dict] = {}
+    for key, members in groups.items():
+        for start in range(0, len(members), batch_size):
+            part = members[start : start + batch_size]
+            recs = measure_frames(pipeline, [m[1] for m in part], key, batch_size, pooled)
+            for m, r in zip(part, recs, strict=True):
+                records[m[0][0]] = r
+    hist = merge_histograms(list(records.values())) if pooled else None
+    return {"records": records, "hist": hist, "failed": failed}
+
+
+def render_task(
+    items: Sequence[tuple[int, str, str, dict | None]],
+    pipeline: Pipeline,
+    batch_size: int,
+    allow_nan: bool,
+) -> dict[int, str | None]:
+    """Dask task: read, render and write a chunk of ``(index, input, output, values)``.
+
+    Returns ``{index: None (written) or error message}``. Outputs are written atomically
+    on the worker, so a killed worker leaves no partial file and its chunk can be re-run.
+    """
+    groups, failed = _groups(items, allow_nan)
+    result: dict[int, str | None] = dict(failed)
+    for key, members in groups.items():
+        for start in range(0, len(members), batch_size):
+            part = members[start : start + batch_size]
+            values = None if part[0][0][3] is None else [m[0][3] for m in part]
+            try:
+                out = np.asarray(
+                    dispatch_render(pipeline, [m[1] for m in part], key, values, batch_size)
+                )
+            except Exception as e:  # a failed batch fails its frames, not the run
+                for m in part:
+                    result[m[0][0]] = f"{m[0][1]}: processing failed: {e}"
+                continue
+            with ThreadPoolExecutor(_IO_THREADS) as ex:
+                futures = [
+                    ex.submit(_write_or_error, pipeline, out[i], m[0][2])
+                    for i, m in enumerate(part)
+                ]
+                errors = [f.result() for f in futures]
+            for m, err in zip(part, errors, strict=True):
+                result[m[0][0]] = err
+    return result
+
+
+def _write_or_error(pipeline: Pipeline, data: np.ndarray, out: str) -> str | None:
+    try:
+        write_frame(pipeline, data, out)
+    except FrameError as e:
+        return str(e)
+    return None
+
+
+def output_path(path: str | os.PathLike, out_dir: str | os.PathLike, ext: str) -> Path:
+    """``out_dir/<stem><ext>`` for an input frame."""
+    p = Path(path)
+    return Path(out_dir) / (p.name[: -len(p.suffix)] + ext if p.suffix else p.name + ext)
+
+
+__all__ = [
+    "FrameError",
+    "dispatch_render",
+    "measure_frames",
+    "measure_task",
+    "output_path",
+    "read_frame",
+    "render_task",
+    "write_frame",
+]

@@ -1,0 +1,191 @@
+"""``hdrjax batch "frames/*.exr" -o out/``: one pipeline over many frames.
+
+Exit status: 0 when every frame was written (or skipped because its output exists), 1 when
+at least one frame failed (each failure is printed; the others are written), 2 for usage
+errors.
+"""
+
+import argparse
+import sys
+
+from ._cmd_tonemap import build_operator
+from ._common import DataError, UsageError, positive_float
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return v
+
+
+def _odd_size(text: str) -> int:
+    v = _positive_int(text)
+    if v % 2 == 0:
+        raise argparse.ArgumentTypeError(f"expected an odd window size, got {text!r}")
+    return v
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "batch",
+        help="tone-map many frames (a glob pattern or files) into a folder",
+        description="Tone-map a sequence of HDR frames with one pipeline: batched and "
+        "compiled in this process, or on a Dask cluster (--workers / --scheduler). Outputs "
+        "are OUT/<stem>.<format>; frames whose output exists are skipped (resume). Exit "
+        "status: 0 all frames done, 1 some frames failed (listed), 2 usage error.",
+    )
+    p.add_argument(
+        "inputs",
+        nargs="+",
+        help='frames: files or quoted glob patterns ("frames/*.exr"), expanded by hdrjax',
+    )
+    p.add_argument("-o", "--output", required=True, help="output folder (created if missing)")
+    p.add_argument("--method", default="reinhard2002", help="operator name (default reinhard2002)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--same-parameters",
+        dest="parameters",
+        action="store_const",
+        const="same",
+        help="measure the automatic parameters on the whole sequence, use them for all frames",
+    )
+    mode.add_argument(
+        "--per-frame",
+        dest="parameters",
+        action="store_const",
+        const="per-frame",
+        help="measure each frame by itself (default)",
+    )
+    mode.add_argument(
+        "--smooth",
+        dest="parameters",
+        action="store_const",
+        const="smooth",
+        help="per-frame parameters smoothed over time (no flicker); see --smooth-frames",
+    )
+    p.set_defaults(parameters="per-frame")
+    p.add_argument(
+        "--smooth-frames",
+        type=float,
+        default=5.0,
+        help="time constant of --smooth in frames (default 5)",
+    )
+    p.add_argument("--key", type=positive_float, help="Reinhard key a (default: estimated)")
+    p.add_argument("--white", type=positive_float, help="L_white (default: estimated)")
+    p.add_argument("--L-wa", dest="L_wa", type=positive_float, help="adaptation, cd/m²")
+    p.add_argument("--L-max", dest="L_max", type=positive_float, help="luminance mapped to white")
+    p.add_argument("--L-da", dest="L_da", type=positive_float, help="display adaptation, cd/m²")
+    p.add_argument(
+        "--format",
+        choices=("png", "tif", "jpg", "exr", "hdr", "pfm"),
+        default="png",
+        help="output format (default png)",
+    )
+    p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
+    p.add_argument(
+        "--transfer", choices=("srgb", "gamma", "linear"), default="srgb", help="display encoding"
+    )
+    p.add_argument("--gamma", type=positive_float, default=2.2, help="for --transfer gamma")
+    p.add_argument(
+        "--scale", type=positive_float, default=1.0, help="multiply every frame by this first"
+    )
+    p.add_argument("--median", type=_odd_size, metavar="K", help="median filter K×K first")
+    p.add_argument("--mean", type=_odd_size, metavar="K", help="mean filter K×K first")
+    p.add_argument(
+        "--desaturate", action="store_true", help="desaturate highlights (automatic threshold)"
+    )
+    p.add_argument(
+        "--vision",
+        metavar="EFFECTS",
+        help="comma-separated human-vision effects (acuity,glare,colour_loss,...); "
+        "frames must be in cd/m² (use --scale)",
+    )
+    p.add_argument(
+        "--batch-size", type=_positive_int, default=8, help="frames per compiled call (8)"
+    )
+    p.add_argument(
+        "--workers", type=_positive_int, help="start a local Dask cluster with N processes"
+    )
+    p.add_argument(
+        "--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786)"
+    )
+    p.add_argument("--no-resume", action="store_true", help="rewrite existing outputs")
+    p.add_argument(
+        "--allow-nan", action="store_true", help="render NaN pixels black instead of failing"
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run, table=None)
+
+
+def build_pipeline(args: argparse.Namespace):
+    """The :class:`hdrjax.batch.Pipeline` the arguments describe (UsageError if invalid)."""
+    from ..batch import Pipeline, step
+
+    op = build_operator(args)
+    steps = []
+    if args.median:
+        steps.append(step("median", size=args.median))
+    if args.mean:
+        steps.append(step("mean", size=args.mean))
+    if args.desaturate:
+        steps.append(step("desaturate"))
+    if args.vision:
+        effects = tuple(e.strip() for e in args.vision.split(",") if e.strip())
+        steps.append(step("vision", effects=effects))
+    if args.bits == 16 and args.format == "jpg":
+        raise UsageError("--bits 16 needs --format png or tif (JPEG is 8-bit)")
+    try:
+        return Pipeline(
+            op,
+            steps=tuple(steps),
+            format=args.format,
+            bits=args.bits,
+            transfer=args.transfer,
+            gamma=args.gamma,
+            scale=args.scale,
+        )
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..batch import expand_paths, run as batch_run
+
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("--workers starts a local cluster; it does not go with --scheduler")
+    if not args.smooth_frames >= 0:
+        raise UsageError(f"--smooth-frames: expected a number >= 0, got {args.smooth_frames}")
+    pipeline = build_pipeline(args)
+    try:
+        paths = expand_paths(args.inputs)
+    except FileNotFoundError as e:
+        raise DataError(str(e)) from None
+    try:
+        summary = batch_run(
+            paths,
+            pipeline,
+            args.output,
+            parameters=args.parameters,
+            smooth_frames=args.smooth_frames,
+            batch_size=args.batch_size,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.quiet,
+            resume=not args.no_resume,
+            allow_nan=args.allow_nan,
+        )
+    except (ValueError, ImportError) as e:
+        raise UsageError(str(e)) from None
+    except OSError as e:
+        raise DataError(str(e)) from None
+    print(f"hdrjax batch: {summary}")
+    if summary.failed:
+        print(f"failed ({len(summary.failed)}):", file=sys.stderr)
+        for msg in summary.failed.values():
+            print(f"  {msg}", file=sys.stderr)
+        return 1
+    return 0
