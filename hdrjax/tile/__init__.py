@@ -1,0 +1,43 @@
+"""Tiled processing of huge images: neighbourhood steps on tiles with halos.
+
+Numeric contract: float images ``(H, W)`` or channels-last ``(H, W, C)``, any units (the
+steps' own). :func:`apply` runs a step in-process, one window at a time, into a
+preallocated (or memory-mapped) array; :func:`to_dask` builds the same computation as a
+``dask.array.map_overlap`` graph for a cluster. Steps that need global image statistics
+(Reinhard's key, white and log-average) take them from a first pass, :func:`statistics` /
+:func:`dask_statistics`, which equals :func:`hdrjax._stats.measure` on the whole image.
+
+Results equal the whole-image computation: bit for bit for :class:`Median` and
+:class:`Mean`; to float rounding for :class:`Glare` with a truncated PSF and for
+:class:`Tonemap` (FFTs of another size for the local Reinhard operator, whose discrete
+scale choice may then differ at pixels with an activity within rounding of its
+threshold). See :mod:`._layout` for the window geometry that makes this hold at the image
+edges.
+"""
+
+from ._apply import DEFAULT_TILE as DEFAULT_TILE, apply as apply, statistics as statistics
+from ._dask import dask_statistics as dask_statistics, to_dask as to_dask
+from ._steps import (
+    TILE_MODES as TILE_MODES,
+    AbstractStep as AbstractStep,
+    Glare as Glare,
+    Mean as Mean,
+    Median as Median,
+    Neighbourhood as Neighbourhood,
+    Tonemap as Tonemap,
+)
+
+__all__ = [
+    "DEFAULT_TILE",
+    "TILE_MODES",
+    "AbstractStep",
+    "Glare",
+    "Mean",
+    "Median",
+    "Neighbourhood",
+    "Tonemap",
+    "apply",
+    "dask_statistics",
+    "statistics",
+    "to_dask",
+]

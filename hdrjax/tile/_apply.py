@@ -1,0 +1,193 @@
+"""In-process tiled execution: windows one at a time, results into a preallocated array."""
+
+from collections.abc import Iterator, Sequence
+
+import jax.numpy as jnp
+import numpy as np
+
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from ._layout import Span, check_tile, spans
+from ._stats import measure_blocks, numpy_runner, stats_dtype
+from ._steps import AbstractStep, Glare
+
+DEFAULT_TILE = (1024, 1024)
+
+
+def check_image(image) -> tuple[int, ...]:
+    shape = tuple(int(s) for s in np.shape(image))
+    if len(shape) not in (2, 3) or shape[0] < 1 or shape[1] < 1:
+        raise ValueError(f"image: expected shape (H, W) or (H, W, C), got {shape}")
+    return shape
+
+
+def check_step(step) -> AbstractStep:
+    if not isinstance(step, AbstractStep):
+        raise ValueError(
+            f"step: expected an hdrjax.tile step (Median, Mean, Tonemap, Glare, Neighbourhood),"
+            f" got {type(step).__name__}"
+        )
+    return step
+
+
+def tile_grid(shape, tile, halo) -> list[tuple[Span, Span]]:
+    """``(row span, column span)`` of every tile, row-major."""
+    ty, tx = check_tile(tile)
+    hy, hx = halo
+    return [
+        (r, c) for r in spans(shape[0], ty, hy, "rows") for c in spans(shape[1], tx, hx, "columns")
+    ]
+
+
+def _blocks(image, tile) -> Iterator[np.ndarray]:
+    """Tiles without halo, edge tiles padded with NaN to one shape (one compilation): NaN
+    pixels are left out of every statistic, and ``n_pixels`` comes from the image shape."""
+    shape = np.shape(image)
+    ty, tx = check_tile(tile)
+    full = (min(ty, shape[0]), min(tx, shape[1])) + tuple(shape[2:])
+    for r, c in tile_grid(shape, tile, (0, 0)):
+        block = np.asarray(image[r.out, c.out])
+        if block.shape != full:
+            pad = [(0, full[0] - block.shape[0]), (0, full[1] - block.shape[1])]
+            block = np.pad(block, pad + [(0, 0)] * (block.ndim - 2), constant_values=np.nan)
+        yield block
+
+
+def statistics(
+    image,
+    *,
+    tile: int | Sequence[int] = DEFAULT_TILE,
+    weights: Sequence[float] | None = None,
+    delta: float = DEFAULT_DELTA,
+    bins: int = DEFAULT_BINS,
+) -> LuminanceStats:
+    """Whole-image luminance statistics computed tile by tile (the first pass).
+
+    Args:
+        image: ``(H, W, 3)`` linear RGB (statistics of its luminance, non-finite pixels
+            excluded as the operators do), or an ``(H, W)`` / ``(H, W, 1)`` luminance;
+            any array NumPy can slice (``np.memmap`` for images larger than memory).
+        tile: tile size (rows, columns), or one integer for square tiles.
+        weights: luminance weights (Rec.709 by default).
+        delta: offset in the log-average (as :func:`hdrjax._stats.measure`).
+        bins: histogram bins for the percentiles (as ``measure``).
+
+    Returns:
+        The :class:`~hdrjax._stats.LuminanceStats` that ``measure`` returns for the whole
+        image's luminance: counts, extrema, ``p01``, ``p99`` and their error bound
+        identical; the two log-averages to float32 rounding (see :mod:`._stats`).
+    """
+    shape = check_image(image)
+    check_tile(tile)
+    if len(shape) == 3 and shape[-1] not in (1, 3):
+        raise ValueError(f"image: expected 1 or 3 channels, got shape {shape}")
+    run = numpy_runner(lambda: _blocks(image, tile))
+    return measure_blocks(
+        run,
+        shape[0] * shape[1],
+        np.asarray(image[:1, :1]).dtype,
+        weights=weights,
+        delta=delta,
+        bins=bins,
+    )
+
+
+def resolve_halo(step: AbstractStep, shape, halo) -> tuple[int, int]:
+    need = tuple(int(v) for v in step.halo(shape))
+    if halo is None:
+        return need  # type: ignore[return-value]
+    h = (halo, halo) if isinstance(halo, int) else tuple(halo)
+    if len(h) != 2 or any(isinstance(v, bool) or int(v) != v for v in h):
+        raise ValueError(f"halo: expected one or two integers, got {halo!r}")
+    if h[0] < need[0] or h[1] < need[1]:
+        raise ValueError(
+            f"halo: the step reads {need} pixels (rows, columns) beyond a tile; got {h}"
+        )
+    return int(h[0]), int(h[1])
+
+
+def bind(step: AbstractStep, image, shape, stats, tile) -> AbstractStep:
+    if stats is None and step.needs_stats:
+        stats = statistics(image, tile=tile)
+    return step.bind(shape, stats)
+
+
+def check_glare(step, shape, tile) -> None:
+    if isinstance(step, Glare) and step.radius_deg is None:
+        ty, tx = check_tile(tile)
+        if ty < shape[0] or tx < shape[1]:
+            raise ValueError(
+                "Glare: the full Spencer PSF spans the whole image, so tiles would each need"
+                " the whole image; set radius_deg (a truncated PSF) or one tile for the image"
+            )
+
+
+def apply(
+    step: AbstractStep,
+    image,
+    *,
+    tile: int | Sequence[int] = DEFAULT_TILE,
+    halo: int | Sequence[int] | None = None,
+    stats: LuminanceStats | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """Run a neighbourhood ``step`` on an image tile by tile, with halos.
+
+    Each tile's window (the tile and ``halo`` pixels around it, shifted inside the image at
+    its edges) is mapped by the step's jit-compiled function — one compilation, as every
+    window has the same shape — and its tile written into ``out``. The filters give the
+    whole-image result bit for bit; see each step for the others.
+
+    Memory: the input, ``out`` and two windows with the step's temporaries (one in flight
+    while the previous one is copied out). With ``np.memmap`` input and output the image
+    need not fit in memory.
+
+    Args:
+        step: :class:`Median`, :class:`Mean`, :class:`Tonemap`, :class:`Glare` or
+            :class:`Neighbourhood`.
+        image: ``(H, W)`` or ``(H, W, C)`` float image (any array NumPy can slice).
+        tile: output tile size (rows, columns) or one integer; must be at least the halo
+            unless it spans the image.
+        halo: pixels read beyond each tile; default (and minimum) the step's own.
+        stats: whole-image statistics for steps with global parameters (Reinhard's key);
+            ``None`` computes them with :func:`statistics` first.
+        out: preallocated result (e.g. ``np.memmap``), the image's shape; a new float32
+            (float64 for float64 input under x64) array by default. May be ``image``
+            itself for a pointwise step (halo 0).
+
+    Returns:
+        ``out``.
+
+    Raises:
+        ValueError: on a bad tile (not positive, or smaller than the halo), a halo smaller
+            than the step's, an ``out`` of another shape, or in-place use with a halo.
+    """
+    step = check_step(step)
+    shape = check_image(image)
+    check_glare(step, shape, tile)
+    h = resolve_halo(step, shape, halo)
+    grid = tile_grid(shape, tile, h)
+    if out is None:
+        out = np.empty(shape, stats_dtype(np.asarray(image[:1, :1]).dtype))
+    elif tuple(out.shape) != shape:
+        raise ValueError(f"out: expected shape {shape}, got {tuple(out.shape)}")
+    elif h != (0, 0) and np.shares_memory(out, image):
+        raise ValueError(f"out: in-place is only for pointwise steps; this one has halo {h}")
+    bound = bind(step, image, shape, stats, tile)
+    cdt = stats_dtype(np.asarray(image[:1, :1]).dtype)  # the filters' float promotion
+    pending = None
+    for r, c in grid:
+        window = jnp.asarray(np.asarray(image[r.window, c.window], dtype=cdt))
+        result = bound(window)  # dispatched asynchronously: overlaps the copy-out below
+        if pending is not None:
+            _store(out, *pending)
+        pending = (result, r, c)
+    if pending is not None:
+        _store(out, *pending)
+    return out
+
+
+def _store(out, result, r: Span, c: Span) -> None:
+    out[r.out, c.out] = np.asarray(result)[r.crop, c.crop]
+
+
+__all__ = ["DEFAULT_TILE", "apply", "statistics", "tile_grid"]

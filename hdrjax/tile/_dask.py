@@ -1,0 +1,128 @@
+"""The same steps on a ``dask.array`` (``map_overlap``), e.g. on a distributed cluster.
+
+``map_overlap`` with ``depth = halo`` and ``boundary="none"`` hands each chunk to the step
+with ``halo`` neighbouring pixels on its inner sides and nothing beyond the image, which is
+what :mod:`._layout` windows are: the step's own rule handles the true image edges and the
+result equals the whole-image computation like :func:`hdrjax.tile.apply`'s. Chunks must be at
+least the halo (dask's rule too); windows differ in shape at the image edges, so a worker
+compiles a few shapes.
+"""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from ._apply import check_glare, check_image, check_step, resolve_halo
+from ._stats import call_host, measure_blocks, stats_dtype
+from ._steps import AbstractStep
+
+
+def _dask():
+    try:
+        import dask
+        import dask.array as da
+    except ImportError as e:  # pragma: no cover - dask is an optional dependency
+        raise ImportError("hdrjax.tile's dask functions need dask[array]") from e
+    return dask, da
+
+
+def _run_blocks(darr):
+    dask, _ = _dask()
+    blocks = list(darr.to_delayed().ravel())
+
+    def run(fn, args, kwargs):
+        tasks = [dask.delayed(call_host)(fn, b, *args, **kwargs) for b in blocks]
+        return list(dask.compute(*tasks))
+
+    return run
+
+
+def _check_darr(darr):
+    _, da = _dask()
+    if not isinstance(darr, da.Array):
+        raise ValueError(f"darr: expected a dask.array.Array, got {type(darr).__name__}")
+    shape = check_image(darr)
+    if len(shape) == 3 and len(darr.chunks[2]) != 1:
+        darr = darr.rechunk({2: -1})  # a pixel's channels belong together
+    return darr, shape
+
+
+def dask_statistics(
+    darr,
+    *,
+    weights: Sequence[float] | None = None,
+    delta: float = DEFAULT_DELTA,
+    bins: int = DEFAULT_BINS,
+) -> LuminanceStats:
+    """:func:`hdrjax.tile.statistics` over a dask array's chunks (three computes)."""
+    darr, shape = _check_darr(darr)
+    return measure_blocks(
+        _run_blocks(darr), shape[0] * shape[1], darr.dtype, weights=weights, delta=delta, bins=bins
+    )
+
+
+class _Window:
+    """Picklable chunk function for ``map_overlap`` (jit caches live in each worker)."""
+
+    def __init__(self, step: AbstractStep, dtype):
+        self.step, self.dtype = step, np.dtype(dtype)
+
+    def __call__(self, block):
+        if block.size == 0:
+            return np.empty(block.shape, self.dtype)
+        return np.asarray(self.step(np.asarray(block, self.dtype)), self.dtype)
+
+
+def to_dask(
+    step: AbstractStep,
+    darr,
+    *,
+    halo: int | Sequence[int] | None = None,
+    stats: LuminanceStats | None = None,
+):
+    """A lazy ``dask.array`` of ``step`` applied to ``darr`` via ``map_overlap``.
+
+    Args:
+        step: a tile step (see :func:`hdrjax.tile.apply`).
+        darr: ``(H, W)`` or ``(H, W, C)`` float dask array; every chunk at least the halo
+            (the channel axis is put in one chunk).
+        halo: overlap depth; default (and minimum) the step's own.
+        stats: whole-image statistics for steps with global parameters; ``None`` computes
+            them now with :func:`dask_statistics` (three small computes).
+
+    Returns:
+        A dask array of the result (float32, or float64 for float64 input under x64), same
+        chunks; compute it, or ``store`` it chunk by chunk.
+
+    Raises:
+        ValueError: if a chunk is smaller than the halo or the step cannot be tiled.
+    """
+    step = check_step(step)
+    darr, shape = _check_darr(darr)
+    check_glare(step, shape, (min(darr.chunks[0]), min(darr.chunks[1])))
+    hy, hx = resolve_halo(step, shape, halo)
+    for ax, hh in ((0, hy), (1, hx)):
+        small = min(darr.chunks[ax])
+        if hh > small and len(darr.chunks[ax]) > 1:
+            name = ("rows", "columns")[ax]
+            raise ValueError(
+                f"darr: chunks of {small} {name} are smaller than the step's halo of {hh} {name};"
+                " rechunk to larger chunks"
+            )
+    if stats is None and step.needs_stats:
+        stats = dask_statistics(darr)
+    bound = step.bind(shape, stats)
+    dtype = stats_dtype(darr.dtype)
+    depth = {0: hy, 1: hx} if len(shape) == 2 else {0: hy, 1: hx, 2: 0}
+    return darr.map_overlap(
+        _Window(bound, dtype),
+        depth=depth,
+        boundary="none",
+        trim=True,
+        dtype=dtype,
+        meta=np.empty((0,) * len(shape), dtype),
+    )
+
+
+__all__ = ["dask_statistics", "to_dask"]

@@ -1,0 +1,296 @@
+"""Neighbourhood steps that can run on tiles: each declares its halo and maps one window.
+
+A step is an equinox Module. :meth:`AbstractStep.halo` gives, for an image shape, how many
+pixels beyond a tile (rows, columns) its result depends on; :meth:`AbstractStep.bind` fixes
+what the whole image determines (image size, global statistics) and returns the step that is
+then called on every window. A window's true image edges are the image's own, so each
+step handles them with the whole-image function's own edge rule (see :mod:`._layout`).
+"""
+
+import abc
+import functools
+from collections.abc import Callable, Sequence
+from typing import Literal
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from .._stats import LuminanceStats
+from ..filters import mean_filter, median_filter
+from ..filters._api import check_passes, check_size
+from ..operators._base import AbstractLuminanceCurve, AbstractOperator, _apply_jit
+from ..operators._reinhard2002 import Reinhard2002, jgt_key, jgt_white
+from ..operators._reinhard2002_local import Reinhard2002Local, _radius, scales
+from ..vision._fft import fft_size, kernel_spectrum
+from ..vision._spencer1995 import Variant, apply_glare, glare_kernel, kernel_radius
+from ..vision._view import ResolvedView, View, resolve_view
+
+TILE_MODES = ("nearest", "reflect", "mirror")
+"""Filter edge modes that tiles reproduce exactly (``"wrap"`` reads the opposite edge)."""
+
+
+class AbstractStep(eqx.Module):
+    """A neighbourhood operation with a known halo (see the module docstring)."""
+
+    @property
+    def needs_stats(self) -> bool:
+        """Whether :meth:`bind` needs whole-image statistics (a first pass)."""
+        return False
+
+    @abc.abstractmethod
+    def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
+        """Pixels (rows, columns) beyond a tile that its result depends on."""
+
+    def bind(self, shape: tuple[int, ...], stats: LuminanceStats | None) -> "AbstractStep":
+        """The step for an image of ``shape`` with global ``stats`` (first pass) filled in."""
+        del shape, stats
+        return self
+
+    @abc.abstractmethod
+    def __call__(self, window: Array) -> Array:
+        """Map one window (``(h, w)`` or ``(h, w, C)``) to a result of the same shape."""
+
+
+def _check_mode(mode: str) -> str:
+    if mode not in TILE_MODES:
+        raise ValueError(
+            f"mode: tiles reproduce the edge modes {', '.join(TILE_MODES)}, got {mode!r}"
+            " ('wrap' needs the opposite image edge; run the whole image instead)"
+        )
+    return mode
+
+
+def _check_planes(shape, channel_axis) -> None:
+    """Filters see ``(H, W)`` planes with ``channel_axis=None``, else ``(H, W, C)``."""
+    want = 2 if channel_axis is None else 3
+    if len(shape) != want:
+        what = "(H, W) with channel_axis=None" if want == 2 else "(H, W, C) with channel_axis=-1"
+        raise ValueError(f"image: expected shape {what}, got {tuple(shape)}")
+
+
+class Median(AbstractStep):
+    """:func:`hdrjax.filters.median_filter` on tiles; bit-identical to the whole image.
+
+    Halo ``passes · (size // 2)``. Each window is filtered with the same function; its
+    flat pixel positions (the luminance criterion's tie-break) are the image's shifted by a
+    constant, so ties go to the same pixel as in the whole image.
+    """
+
+    size: int = eqx.field(static=True, default=5)
+    criterion: Literal["luminance", "channels", "vector"] = eqx.field(
+        static=True, default="luminance"
+    )
+    passes: int = eqx.field(static=True, default=1)
+    mode: str = eqx.field(static=True, default="nearest")
+    weights: tuple[float, float, float] | None = eqx.field(static=True, default=None)
+    channel_axis: int | None = eqx.field(static=True, default=-1)
+
+    def __check_init__(self):
+        check_size(self.size)
+        check_passes(self.passes)
+        _check_mode(self.mode)
+
+    def halo(self, shape):
+        h = self.passes * (self.size // 2)
+        return h, h
+
+    def bind(self, shape, stats):
+        _check_planes(shape, self.channel_axis)
+        return self
+
+    def __call__(self, window):
+        return median_filter(
+            window,
+            self.size,
+            criterion=self.criterion,
+            passes=self.passes,
+            mode=self.mode,  # type: ignore[arg-type]
+            weights=self.weights,
+            channel_axis=self.channel_axis,
+        )
+
+
+class Mean(AbstractStep):
+    """:func:`hdrjax.filters.mean_filter` on tiles; bit-identical to the whole image.
+
+    Halo ``passes · (size // 2)``; every output pixel is the same pairwise sum of the same
+    window values as in the whole-image filter.
+    """
+
+    size: int = eqx.field(static=True, default=5)
+    passes: int = eqx.field(static=True, default=1)
+    mode: str = eqx.field(static=True, default="nearest")
+    channel_axis: int | None = eqx.field(static=True, default=-1)
+
+    def __check_init__(self):
+        check_size(self.size)
+        check_passes(self.passes)
+        _check_mode(self.mode)
+
+    def halo(self, shape):
+        h = self.passes * (self.size // 2)
+        return h, h
+
+    def bind(self, shape, stats):
+        _check_planes(shape, self.channel_axis)
+        return self
+
+    def __call__(self, window):
+        return mean_filter(
+            window,
+            self.size,
+            passes=self.passes,
+            mode=self.mode,  # type: ignore[arg-type]
+            channel_axis=self.channel_axis,
+        )
+
+
+def _bind_reinhard(op: AbstractOperator, stats: LuminanceStats | None) -> AbstractOperator:
+    """Fill a Reinhard operator's unset key/white/log-average from whole-image statistics,
+    with the formulas its own ``_measure`` uses."""
+    if not op.unset():
+        return op
+    if stats is None:
+        raise ValueError(f"{op.name}: unset parameters {op.unset()} need whole-image stats")
+    lbar = stats.log_average if op.log_average is None else op.log_average  # type: ignore[attr-defined]
+    key = jgt_key(stats) if op.key is None else op.key  # type: ignore[attr-defined]
+    if isinstance(op, Reinhard2002):
+        white = jgt_white(stats, key / lbar) if op.L_white is None else op.L_white
+        return eqx.tree_at(
+            lambda o: (o.key, o.L_white, o.log_average),
+            op,
+            (key, white, lbar),
+            is_leaf=lambda x: x is None,
+        )
+    return eqx.tree_at(
+        lambda o: (o.key, o.log_average), op, (key, lbar), is_leaf=lambda x: x is None
+    )
+
+
+class Tonemap(AbstractStep):
+    """A tone-mapping operator on tiles, its global parameters from the first pass.
+
+    Supported: :class:`~hdrjax.operators.Reinhard2002` (pointwise, halo 0) and
+    :class:`~hdrjax.operators.Reinhard2002Local` (halo = radius of its largest Gaussian,
+    ``ceil(4 s_max / (2√2))``: 38 pixels for the default scales), whose unset key, white and
+    log-average come from :func:`hdrjax.tile.statistics` exactly as the operator would
+    measure them; and any pointwise luminance-curve operator whose parameters are all set.
+    The local operator's normalised convolution zero-pads at the true image edges in the
+    window as in the whole image; its FFTs differ in size, so the Gaussian responses agree
+    to float rounding (about 1e-6 relative in float32), not bit for bit. Its per-pixel
+    scale choice (first scale with activity ``|V_i| > ε``) is discontinuous: where an
+    activity lies within that rounding of ``ε`` a tile may pick the neighbouring scale
+    (4 of 262 144 pixels of data/cornell_box.exr, output differing by up to 0.03).
+    """
+
+    operator: AbstractOperator
+
+    def __check_init__(self):
+        op = self.operator
+        if not isinstance(op, AbstractOperator):
+            raise ValueError(f"operator: expected an hdrjax operator, got {type(op).__name__}")
+        known = isinstance(op, Reinhard2002 | Reinhard2002Local)
+        if not known and not (isinstance(op, AbstractLuminanceCurve) and not op.unset()):
+            raise ValueError(
+                f"operator: {op.name} cannot run on tiles; supported: reinhard2002,"
+                " reinhard2002_local, or a pointwise curve operator with every parameter set"
+            )
+
+    @property
+    def needs_stats(self) -> bool:
+        return bool(self.operator.unset())
+
+    def halo(self, shape):
+        op = self.operator
+        if isinstance(op, Reinhard2002Local):
+            r = _radius(max(scales(op.s_low, op.s_high, op.num)))
+            return r, r
+        return 0, 0
+
+    def bind(self, shape, stats):
+        del shape
+        return Tonemap(_bind_reinhard(self.operator, stats))
+
+    def __call__(self, window):
+        return _apply_jit(self.operator, jnp.asarray(window))
+
+
+@functools.lru_cache(maxsize=16)
+def _window_spectrum(
+    view: ResolvedView, variant: str, radius_deg: float, shape: tuple[int, int], dtype: str
+) -> tuple[Array, tuple[int, int]]:
+    """The whole-image glare kernel's spectrum on a window's FFT grid."""
+    ry, rx = kernel_radius(view, radius_deg)
+    size = fft_size(shape[0], shape[1], ry, rx)
+    kernel = glare_kernel(view, variant, radius_deg=radius_deg)  # type: ignore[arg-type]
+    cdt = np.complex128 if dtype == "float64" else np.complex64
+    return jnp.asarray(kernel_spectrum(kernel, size).astype(cdt)), size
+
+
+class Glare(AbstractStep):
+    """Spencer et al. 1995 veiling glare (:func:`hdrjax.vision.glare`) on tiles.
+
+    The full PSF reaches across the whole image (halo = image size), which tiles cannot
+    shorten; ``radius_deg`` truncates it (:func:`hdrjax.vision.glare`'s own parameter:
+    the light scattered further stays in its pixel). With it the halo is the kernel radius
+    ``ceil(radius_deg / pixel_deg)`` and tiles reproduce ``glare(rgb, view,
+    radius_deg=radius_deg)`` to float rounding (a different FFT size per window and a
+    per-window normalisation: about 1e-6 of the brightest pixel's scattered light in
+    float32). The kernel is that of the whole image's view (pixel size in degrees).
+    """
+
+    view: View | ResolvedView | float | None = eqx.field(static=True, default=None)
+    variant: Variant = eqx.field(static=True, default="photopic")
+    radius_deg: float | None = eqx.field(static=True, default=None)
+
+    def _view(self, shape) -> ResolvedView:
+        return resolve_view(self.view, shape[0], shape[1])
+
+    def halo(self, shape):
+        return kernel_radius(self._view(shape), self.radius_deg)
+
+    def bind(self, shape, stats):
+        del stats
+        if len(shape) != 3 or shape[-1] != 3:
+            raise ValueError(f"image: glare expects (H, W, 3) RGB, got shape {shape}")
+        return Glare(self._view(shape), self.variant, self.radius_deg)
+
+    def __call__(self, window):
+        if not isinstance(self.view, ResolvedView):
+            raise ValueError("Glare: bind the step to the image shape first (step.bind)")
+        x = jnp.asarray(window)
+        spec, size = _window_spectrum(
+            self.view, self.variant, self.radius_deg, x.shape[:2], str(x.dtype)
+        )
+        return apply_glare(x, spec, size)
+
+
+class Neighbourhood(AbstractStep):
+    """Any function of a window with a known halo, e.g. a user's filter.
+
+    ``fn(window)`` must return the window's shape and treat the window's edges as image
+    edges (with the padding rule it wants at the true image edges); results equal the
+    whole-image ``fn(image)`` wherever each output pixel depends only on inputs within
+    ``radius`` pixels (rows, columns).
+    """
+
+    fn: Callable[[Array], Array] = eqx.field(static=True)
+    radius: tuple[int, int] = eqx.field(static=True, converter=lambda r: _pair(r))
+
+    def halo(self, shape):
+        return self.radius
+
+    def __call__(self, window):
+        return self.fn(window)
+
+
+def _pair(r: int | Sequence[int]) -> tuple[int, int]:
+    t = (r, r) if isinstance(r, int) else tuple(r)
+    if len(t) != 2 or any(isinstance(v, bool) or int(v) != v or v < 0 for v in t):
+        raise ValueError(f"radius: expected one or two integers >= 0, got {r!r}")
+    return int(t[0]), int(t[1])
+
+
+__all__ = ["TILE_MODES", "AbstractStep", "Glare", "Mean", "Median", "Neighbourhood", "Tonemap"]
