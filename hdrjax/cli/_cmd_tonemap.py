@@ -27,13 +27,7 @@ def register(subparsers) -> None:
         description="Tone-map an HDR image. Parameters left out are estimated from the image "
         "(Reinhard 2002 JGT key and white point, log-average adaptation luminance).",
     )
-    p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
-    add_output_argument(p)
-    p.add_argument(
-        "--method",
-        default="reinhard2002",
-        help="operator name (see `hdrjax info`; default reinhard2002)",
-    )
+    add_input_output_method_arguments(p)
     p.add_argument("--key", type=positive_float, help="Reinhard key a (default: JGT estimate)")
     p.add_argument(
         "--white",
@@ -62,26 +56,43 @@ def register(subparsers) -> None:
     p.add_argument("--f-number", type=positive_float, help="aperture N (linear)")
     p.add_argument("--iso", type=positive_float, help="ISO speed S (linear)")
     p.add_argument("--ev100", type=float, help="exposure value at ISO 100 (linear)")
-    p.add_argument("--table", help="CSV/JSON table for --method tabulated")
-    p.add_argument(
-        "--scale",
-        type=positive_float,
-        default=1.0,
-        help="multiply the input by this factor first (e.g. to cd/m²)",
-    )
+    add_table_and_scale_arguments(p)
     add_encoding_arguments(p)
     p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
     p.set_defaults(func=run)
 
 
+def add_input_output_method_arguments(p: argparse.ArgumentParser) -> None:
+    """``INPUT``, ``-o/--output`` and ``--method`` (shared with ``hdrjax fit``)."""
+    p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
+    add_output_argument(p)
+    p.add_argument(
+        "--method",
+        default="reinhard2002",
+        help="operator name (see `hdrjax info`; default reinhard2002)",
+    )
+
+
 def add_output_argument(p: argparse.ArgumentParser) -> None:
-    """``-o/--output`` (shared with ``hdrjax fit``)."""
+    """``-o/--output``."""
     p.add_argument(
         "-o",
         "--output",
         required=True,
         help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
         "(display-referred linear)",
+    )
+
+
+def add_table_and_scale_arguments(p: argparse.ArgumentParser) -> None:
+    """``--table`` (for ``--method tabulated``, see :func:`build_operator`) and ``--scale``
+    (see :func:`load_rgb`), shared with ``hdrjax fit``."""
+    p.add_argument("--table", help="CSV/JSON table for --method tabulated")
+    p.add_argument(
+        "--scale",
+        type=positive_float,
+        default=1.0,
+        help="multiply the input by this factor first (e.g. to cd/m²)",
     )
 
 
