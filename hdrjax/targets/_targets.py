@@ -43,8 +43,17 @@ def _vec(x: ArrayLike) -> Array:
     return jnp.atleast_1d(_arr(x))
 
 
+def _display(rgb: ArrayLike) -> Array:
+    """The display image as an array; half floats are computed in the default float."""
+    rgb = jnp.asarray(rgb)
+    if rgb.dtype in (jnp.float16, jnp.bfloat16):
+        rgb = rgb.astype(jnp.result_type(float))
+    return rgb
+
+
 def _display_luminance(rgb: Array, weights: tuple[float, float, float]) -> tuple[Array, Array]:
     """Clipped display luminance and the mask of finite pixels."""
+    rgb = _display(rgb)
     finite = jnp.all(jnp.isfinite(rgb), axis=-1)
     safe = jnp.where(finite[..., None], rgb, 0.0)
     return luminance(jnp.clip(safe, 0.0, 1.0), weights), finite
@@ -165,6 +174,7 @@ class ClippedFraction(AbstractStatisticTarget):
     softness: float = eqx.field(static=True, default=0.01)
 
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " 1"]:
+        display = _display(display)
         finite = jnp.all(jnp.isfinite(display), axis=-1)
         m = jnp.max(jnp.where(finite[..., None], display, 0.0), axis=-1)
         step = jax.nn.sigmoid((m - self.threshold) / self.softness)
@@ -257,11 +267,10 @@ class Reference(AbstractTarget):
             raise ValueError(
                 f"Reference: image {display.shape} and reference {self.reference.shape} differ"
             )
-        finite = jnp.all(jnp.isfinite(display), axis=-1) & jnp.all(
-            jnp.isfinite(self.reference), axis=-1
-        )
+        display, reference = _display(display), _display(self.reference)
+        finite = jnp.all(jnp.isfinite(display), axis=-1) & jnp.all(jnp.isfinite(reference), axis=-1)
         a = jnp.clip(jnp.where(finite[..., None], display, 0.0), 0.0, 1.0)
-        b = jnp.clip(jnp.where(finite[..., None], self.reference, 0.0), 0.0, 1.0)
+        b = jnp.clip(jnp.where(finite[..., None], reference, 0.0), 0.0, 1.0)
         if self.space == "log":
             d = jnp.log(self.eps + a) - jnp.log(self.eps + b)
         else:
@@ -275,7 +284,11 @@ class Reference(AbstractTarget):
 
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " 1"]:
         d, n = self._diff(display)
-        return jnp.sqrt(jnp.sum(d * d) / n)[None]
+        ms = jnp.sum(d * d) / n
+        # the RMSE is |d|-like at a perfect match: use the subgradient 0 there, not ∞ (a fit
+        # that reaches the reference exactly would otherwise report non-finite sensitivities)
+        pos = ms > 0
+        return jnp.where(pos, jnp.sqrt(jnp.where(pos, ms, 1.0)), 0.0)[None]
 
 
 class Scaled(AbstractTarget):

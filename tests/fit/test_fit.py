@@ -165,3 +165,20 @@ def test_downscale_is_a_box_filter():
     assert y.shape == (1, 3, 3)
     np.testing.assert_allclose(y[0, 0], np.asarray(x[:, :2]).mean(axis=(0, 1)))
     assert hf.downscale(x, None) is x
+
+
+def test_exact_reference_match_is_a_success_with_finite_sensitivity():
+    # loss exactly 0: the RMSE statistic's derivative must not be ∞ (it once made the fit
+    # report "non-finite" at the perfect answer)
+    x = np.random.default_rng(0).lognormal(0, 1, (32, 32, 3)).astype(np.float32)
+    ref = np.asarray(hdrjax.tonemap(x, "linear", L_max=8.0))
+    res = hf.fit(
+        hdrjax.make_operator("linear", L_max=5.0),
+        x,
+        ht.Reference(ref),
+        params="L_max",
+        max_size=None,
+    )
+    assert bool(res.success)
+    np.testing.assert_allclose(float(res.params["L_max"]), 8.0, rtol=1e-5)
+    assert np.all(np.isfinite(np.asarray(res.jacobian["L_max"])))
