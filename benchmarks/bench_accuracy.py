@@ -182,15 +182,19 @@ def light_errors(found: hl.Lights, ref: hl.Lights) -> dict[str, float]:
 
 
 def luminance_median_reference(rgb: np.ndarray, size: int) -> np.ndarray:
-    """float64 NumPy luminance-criterion median: in each k×k window (edges replicated) the
-    pixel whose Rec.709 luminance is the median, ties to the earlier pixel in row-major
-    order (stable sort); its whole RGB is taken."""
+    """NumPy luminance-criterion median: in each k×k window (edges replicated) the pixel whose
+    luminance is the median, ties to the earlier pixel in row-major order (stable sort); its
+    whole RGB is taken. The ranking key is the float32 luminance the filter itself computes
+    (jit-compiled, where XLA may fuse a multiply-add): a float64 key, or an eager float32 one,
+    can split or join exact luminance ties that differ by one rounding step and then pick the
+    other pixel of the tie — a different key, not an error of the selection."""
     r = size // 2
-    x = np.pad(np.asarray(rgb, np.float64), ((r, r), (r, r), (0, 0)), mode="edge")
-    win = sliding_window_view(x, (size, size), axis=(0, 1))  # (H, W, 3, k, k)
     H_, W_ = rgb.shape[:2]
-    win = win.reshape(H_, W_, 3, size * size)
-    lum = np.einsum("hwck,c->hwk", win, REC709)
+    key = np.asarray(jax.jit(hdrjax.luminance)(np.asarray(rgb, np.float32)))
+    key = np.pad(key, ((r, r), (r, r)), mode="edge")
+    x = np.pad(np.asarray(rgb, np.float64), ((r, r), (r, r), (0, 0)), mode="edge")
+    win = sliding_window_view(x, (size, size), axis=(0, 1)).reshape(H_, W_, 3, size * size)
+    lum = sliding_window_view(key, (size, size)).reshape(H_, W_, size * size)
     pick = np.argsort(lum, axis=-1, kind="stable")[..., (size * size) // 2]
     return np.take_along_axis(win, pick[:, :, None, None].repeat(3, axis=2), axis=-1)[..., 0]
 

@@ -29,8 +29,11 @@ def normalised_primary_matrix(chromaticities: Sequence[float]) -> np.ndarray:
     """
     c = np.asarray(chromaticities, dtype=np.float64).reshape(4, 2)
     x, y = c[:, 0], c[:, 1]
-    xyz = np.stack([x / y, np.ones_like(x), (1.0 - x - y) / y])  # columns: r, g, b, white
-    scale = np.linalg.solve(xyz[:, :3], xyz[:, 3])
+    # primaries as (x, y, z) columns (Y = y), not divided by y: XYZ-as-RGB files have
+    # primaries with y = 0 (red (1, 0)); the solved scales absorb the 1/y
+    xyz = np.stack([x, y, 1.0 - x - y])  # columns: r, g, b, white
+    white = xyz[:, 3] / xyz[1, 3]  # white with Y_w = 1
+    scale = np.linalg.solve(xyz[:, :3], white)
     return xyz[:, :3] * scale
 
 

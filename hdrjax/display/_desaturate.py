@@ -71,8 +71,8 @@ def _counts(L: Array, finite: Array) -> tuple[Array, Array]:
         return a[0] + b[0], a[1] + b[1]
 
     ops = (
-        jnp.where(finite, 1, 0).reshape(-1),
-        jnp.where(finite & (L > 0), 1, 0).reshape(-1),
+        finite.astype(jnp.int32).reshape(-1),  # int32 like the init values, also with x64
+        (finite & (L > 0)).astype(jnp.int32).reshape(-1),
     )
     return jax.lax.reduce(ops, (jnp.int32(0), jnp.int32(0)), combine, (0,))
 

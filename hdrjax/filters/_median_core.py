@@ -197,9 +197,7 @@ def _engine(
     # iteration 0 stores the zero `prev` over strip 0; iteration 1 stores the real one
     init = (jnp.zeros((h, w), out_dtype), jnp.zeros((R // 2, wi), cdt), strip_keys(start(0), R))
     out, last, _ = jax.lax.fori_loop(0, n, body, init)
-    out = jax.lax.dynamic_update_slice(
-        out, _unpack(last, out_dtype), (start(n - 1), jnp.int32(r))
-    )
+    out = jax.lax.dynamic_update_slice(out, _unpack(last, out_dtype), (start(n - 1), jnp.int32(r)))
     for (r0, _, c0, _), vals in zip(bands, band_vals, strict=True):
         out = jax.lax.dynamic_update_slice(out, vals, (jnp.int32(r0), jnp.int32(c0)))
     return out

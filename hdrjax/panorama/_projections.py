@@ -54,6 +54,8 @@ def sample_bilinear(
         ``x.shape + (C,)`` samples.
     """
     img = jnp.asarray(img)
+    if img.dtype in (jnp.float16, jnp.bfloat16):  # half floats are computed in float32
+        img = img.astype(jnp.result_type(float))
     h, w = img.shape[0], img.shape[1]
     xc = jnp.asarray(x) - 0.5
     yc = jnp.clip(jnp.asarray(y) - 0.5, 0.0, h - 1.0)

@@ -151,3 +151,114 @@ def test_fuzz_radiance(tmp_path):
 def test_fuzz_pfm(tmp_path):
     small = hio.write(tmp_path / "small.pfm", np.random.default_rng(6).random((8, 9, 3)))
     _fuzz(small, tmp_path, 60, seed=6)
+
+
+def _read_ok_or_read_error(p, **kw):
+    """hdrjax's one-line ReadError naming the file, or an image of the documented form."""
+    try:
+        img = hio.read(p, **kw)
+    except ReadError as e:
+        msg = str(e)
+        assert "\n" not in msg and msg.split(":")[0].endswith(p.suffix), msg
+        return None
+    assert img.image.dtype == np.float32 and img.image.ndim == 3
+    return img
+
+
+# header edits: each replaces one header field of a valid small file with a hostile value
+RADIANCE_EDITS = [
+    (b"-Y 16 +X 40", b"-Y 0 +X 40"),
+    (b"-Y 16 +X 40", b"-Y 99999999 +X 99999999"),
+    (b"-Y 16 +X 40", b"-Y 16 +X -5"),
+    (b"-Y 16 +X 40", b"-Y 16"),
+    (b"-Y 16 +X 40", b"+Y 16 -Y 40"),
+    (b"-Y 16 +X 40", b"-Y 1.5e3 +X 40"),
+    (b"-Y 16 +X 40", b"+X 40 -Y 16"),  # valid: a transposed orientation
+    (b"FORMAT=32-bit_rle_rgbe", b"FORMAT=bogus"),
+    (b"FORMAT=32-bit_rle_rgbe", b"FORMAT=32-bit_rle_xyze"),  # valid: XYZ
+    (b"FORMAT=32-bit_rle_rgbe\n", b"FORMAT=32-bit_rle_rgbe\nEXPOSURE=0\n"),
+    (b"FORMAT=32-bit_rle_rgbe\n", b"FORMAT=32-bit_rle_rgbe\nEXPOSURE=nan\n"),
+    (b"FORMAT=32-bit_rle_rgbe\n", b"FORMAT=32-bit_rle_rgbe\nPRIMARIES=0 0 0 0 0 0 0 0\n"),
+    (b"\n\n-Y", b"\n-Y"),  # no blank line ending the header
+    (b"#?RADIANCE", b"#?RGBE"),
+]
+PFM_EDITS = [
+    (b"9 8\n", b"0 8\n"),
+    (b"9 8\n", b"-9 8\n"),
+    (b"9 8\n", b"99999999 99999999\n"),
+    (b"9 8\n", b"9\n"),
+    (b"9 8\n", b"9 8 7\n"),
+    (b"-1.0\n", b"0\n"),
+    (b"-1.0\n", b"nan\n"),
+    (b"-1.0\n", b"abc\n"),
+    (b"-1.0\n", b"1.0\n"),  # valid: big-endian scale, values byte-swapped
+    (b"PF\n", b"Pf\n"),  # greyscale header on 3-channel data
+    (b"PF\n", b"PX\n"),
+]
+EXR_EDITS = [
+    (
+        b"compression\x00compression\x00\x01\x00\x00\x00\x03",
+        b"compression\x00compression\x00\x01\x00\x00\x00\x63",
+    ),
+    (
+        b"lineOrder\x00lineOrder\x00\x01\x00\x00\x00\x00",
+        b"lineOrder\x00lineOrder\x00\x01\x00\x00\x00\x07",
+    ),
+    (b"\x76\x2f\x31\x01\x02\x00\x00\x00", b"\x76\x2f\x31\x01\x02\x02\x00\x00"),  # tiled flag
+    (b"\x76\x2f\x31\x01\x02\x00\x00\x00", b"\x76\x2f\x31\x01\x09\x00\x00\x00"),  # version 9
+    (b"B\x00", b"\xff\x00"),  # a channel name byte
+]
+
+
+def _edits(src, edits):
+    for old, new in edits:
+        if old in src:
+            yield src.replace(old, new, 1)
+
+
+def test_header_edits(tmp_path):
+    rng = np.random.default_rng(8)
+    hdr = hio.write(tmp_path / "e.hdr", rng.random((16, 40, 3)) * 10).read_bytes()
+    pfm = hio.write(tmp_path / "e.pfm", rng.random((8, 9, 3))).read_bytes()
+    exr = _small_exr(tmp_path).read_bytes()
+    outcomes = []
+    for src, edits, suffix in (
+        (hdr, RADIANCE_EDITS, ".hdr"),
+        (pfm, PFM_EDITS, ".pfm"),
+        (exr, EXR_EDITS, ".exr"),
+    ):
+        n = 0
+        for data in _edits(src, edits):
+            p = tmp_path / f"edit{suffix}"
+            p.write_bytes(data)
+            outcomes.append(_read_ok_or_read_error(p, sidecars=False) is None)
+            n += 1
+        assert n == len(edits), f"{suffix}: some edits no longer match the written header"
+    assert sum(outcomes) >= len(outcomes) // 2  # most edits are errors, not garbage images
+
+
+def test_fuzz_sidecars(tmp_path):
+    """A corrupt sidecar layer (truncated, flipped bytes) fails the read of the main image
+    with ReadError naming the sidecar, or the image reads correctly."""
+    main = np.random.default_rng(9).random((6, 8, 3)).astype(np.float32)
+    hio.write(tmp_path / "scene.exr", main)
+    good = hio.write(tmp_path / "scene.position.exr", np.ones((6, 8, 3), np.float32))
+    data = good.read_bytes()
+    rng = np.random.default_rng(10)
+    errors = 0
+    for i in range(30):
+        d = bytearray(data)
+        if i % 2:
+            d = d[: int(rng.integers(0, len(d)))]
+        else:
+            for _ in range(int(rng.integers(1, 8))):
+                d[int(rng.integers(0, min(len(d), 400)))] = int(rng.integers(0, 256))
+        good.write_bytes(bytes(d))
+        try:
+            img = hio.read(tmp_path / "scene.exr")
+        except ReadError as e:
+            assert "scene.position.exr" in str(e) and "\n" not in str(e), str(e)
+            errors += 1
+        else:
+            np.testing.assert_array_equal(img.image, main)
+    assert errors > 0

@@ -1,6 +1,7 @@
 """Registry-driven conformance: every registered operator, without anyone listing it.
 
-Hard cases from the foundation issue in float32 and float64, finite gradients, jit == eager,
+Hard cases from the foundation issue and issue 10 (tests/operators/cases.py) in float16,
+float32 and float64, degenerate shapes, finite gradients, jit == eager,
 vmap == loop, batch-shape independence, and NaN/Inf isolation.
 """
 
@@ -53,7 +54,7 @@ def _check_outputs(name, case, img, out):
         np.testing.assert_allclose(out, 0.0, atol=1e-6, err_msg=name)
 
 
-@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("dtype", [np.float16, np.float32, np.float64])
 @pytest.mark.parametrize("name", NAMES)
 def test_hard_cases_stay_finite(name, dtype, request):
     if dtype == np.float64:
@@ -62,7 +63,8 @@ def test_hard_cases_stay_finite(name, dtype, request):
     cases = hard_cases(dtype)
     batch = np.stack(list(cases.values()))  # one compile: frames are independent
     outs = np.asarray(eqx.filter_jit(lambda o, x: o(x))(op, batch))
-    assert outs.dtype == dtype
+    # half floats are computed and returned in the default float (float32 here)
+    assert outs.dtype == (np.float32 if dtype == np.float16 else dtype)
     for (case, img), out in zip(cases.items(), outs, strict=True):
         _check_outputs(name, case, img, out)
     one = SINGLE_PIXEL.astype(dtype)
@@ -114,6 +116,16 @@ def test_gradients_are_finite(name):
     for leaf in jax.tree_util.tree_leaves((gp, gx)):
         assert np.all(np.isfinite(np.asarray(leaf))), name
     assert np.any(np.asarray(gx[-1]) != 0), name  # the output depends on the image
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_degenerate_shapes(name):
+    """One pixel, one row, one column: finite, same shape (issue 10's shape list)."""
+    op = make(name)
+    for shape in [(1, 1), (1, 9), (7, 1)]:
+        img = natural(shape)
+        out = np.asarray(op(img))
+        assert out.shape == img.shape and np.all(np.isfinite(out)), f"{name}: {shape}"
 
 
 @pytest.mark.parametrize("name", NAMES)
