@@ -16,8 +16,11 @@ demo: $(STAMP)
 	mkdir -p out
 	$(VENV)/bin/hdrjax tonemap data/cornell_box.exr -o out/cornell_box.png --method reinhard2002 --verbose
 
+# test files run in parallel, a file's tests in order on one worker (up to 4 workers)
+TEST_WORKERS ?= $(shell $(PYTHON) -c "import os; print(min(4, os.cpu_count() or 1))")
+
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 # the full suite writes benchmarks/results/ and regenerates the README's performance section
 bench: $(STAMP)
