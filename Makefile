@@ -20,7 +20,7 @@ demo: $(STAMP)
 TEST_WORKERS ?= $(shell $(PYTHON) -c "import os; print(min(4, os.cpu_count() or 1))")
 
 test: $(STAMP)
-	$(PY) -m pytest -n $(TEST_WORKERS) --dist loadfile
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=15
 
 # the full suite writes benchmarks/results/ and regenerates the README's performance section
 bench: $(STAMP)

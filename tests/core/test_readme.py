@@ -18,5 +18,6 @@ def test_readme_has_examples():
 @pytest.mark.parametrize("i", range(len(BLOCKS)))
 def test_readme_example_runs(i, monkeypatch, capsys):
     monkeypatch.chdir(REPO)  # examples use data/ and out/ relative to the repository
+    (REPO / "out").mkdir(exist_ok=True)  # as `make demo` creates it; a fresh clone has none
     exec(compile(BLOCKS[i], f"README.md example {i + 1}", "exec"), {"__name__": "__readme__"})
     assert capsys.readouterr().out.strip()  # each example prints what it computed
