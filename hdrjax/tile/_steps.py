@@ -70,7 +70,32 @@ def _check_planes(shape, channel_axis) -> None:
         raise ValueError(f"image: expected shape {what}, got {tuple(shape)}")
 
 
-class Median(AbstractStep):
+class _AbstractFilterStep(AbstractStep):
+    """A k×k filter repeated ``passes`` times: halo ``passes · (size // 2)``, no statistics.
+
+    Subclasses declare the fields ``size``, ``passes``, ``mode`` and ``channel_axis``.
+    """
+
+    size: eqx.AbstractVar[int]
+    passes: eqx.AbstractVar[int]
+    mode: eqx.AbstractVar[str]
+    channel_axis: eqx.AbstractVar[int | None]
+
+    def __check_init__(self):
+        check_size(self.size)
+        check_passes(self.passes)
+        _check_mode(self.mode)
+
+    def halo(self, shape):
+        h = self.passes * (self.size // 2)
+        return h, h
+
+    def bind(self, shape, stats):
+        _check_planes(shape, self.channel_axis)
+        return self
+
+
+class Median(_AbstractFilterStep):
     """:func:`hdrjax.filters.median_filter` on tiles; bit-identical to the whole image.
 
     Halo ``passes · (size // 2)``. Each window is filtered with the same function; its
@@ -87,19 +112,6 @@ class Median(AbstractStep):
     weights: tuple[float, float, float] | None = eqx.field(static=True, default=None)
     channel_axis: int | None = eqx.field(static=True, default=-1)
 
-    def __check_init__(self):
-        check_size(self.size)
-        check_passes(self.passes)
-        _check_mode(self.mode)
-
-    def halo(self, shape):
-        h = self.passes * (self.size // 2)
-        return h, h
-
-    def bind(self, shape, stats):
-        _check_planes(shape, self.channel_axis)
-        return self
-
     def __call__(self, window):
         return median_filter(
             window,
@@ -112,7 +124,7 @@ class Median(AbstractStep):
         )
 
 
-class Mean(AbstractStep):
+class Mean(_AbstractFilterStep):
     """:func:`hdrjax.filters.mean_filter` on tiles; bit-identical to the whole image.
 
     Halo ``passes · (size // 2)``; every output pixel is the same pairwise sum of the same
@@ -123,19 +135,6 @@ class Mean(AbstractStep):
     passes: int = eqx.field(static=True, default=1)
     mode: str = eqx.field(static=True, default="nearest")
     channel_axis: int | None = eqx.field(static=True, default=-1)
-
-    def __check_init__(self):
-        check_size(self.size)
-        check_passes(self.passes)
-        _check_mode(self.mode)
-
-    def halo(self, shape):
-        h = self.passes * (self.size // 2)
-        return h, h
-
-    def bind(self, shape, stats):
-        _check_planes(shape, self.channel_axis)
-        return self
 
     def __call__(self, window):
         return mean_filter(
