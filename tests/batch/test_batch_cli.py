@@ -60,6 +60,24 @@ def test_skip_on_error_resume_and_exit_codes(frames, tmp_path, capsys):
     assert "4 done, 0 skipped" in capsys.readouterr().out
 
 
+def test_compression_level_changes_bytes_not_pixels(frames, tmp_path):
+    from PIL import Image
+
+    folder, good = frames
+    sizes, pixels = {}, {}
+    for level in ("0", "9"):
+        out = tmp_path / f"out{level}"
+        argv = ["batch", *map(str, good[:2]), "-o", str(out), "--compression", level, "-q"]
+        assert main(argv) == 0
+        with Image.open(out / "frame_000.png") as im:
+            pixels[level] = np.asarray(im)
+        sizes[level] = (out / "frame_000.png").stat().st_size
+    np.testing.assert_array_equal(pixels["0"], pixels["9"])
+    # stored (level 0) holds the raw rows: 3 bytes per pixel plus a filter byte per row
+    h, w, _ = pixels["0"].shape
+    assert sizes["0"] > h * (3 * w + 1) > sizes["9"]
+
+
 @pytest.mark.parametrize(
     "extra,needle",
     [
@@ -67,6 +85,7 @@ def test_skip_on_error_resume_and_exit_codes(frames, tmp_path, capsys):
         (["--method", "nosuch"], "unknown operator"),
         (["--format", "jpg", "--bits", "16"], "--bits 16"),
         (["--median", "4"], "odd"),
+        (["--compression", "12"], "--compression"),
         (["--same-parameters", "--smooth"], "not allowed"),
     ],
 )

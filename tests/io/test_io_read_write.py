@@ -339,6 +339,31 @@ def test_write_display_png(tmp_path, bits):
     assert chunks[b"sRGB"] == b"\x00"
 
 
+def test_write_display_compression_level(tmp_path):
+    """The zlib level changes the size of the IDAT stream, never the pixels; the level
+    written is the one asked for (zlib's header records levels 0-1 / 2-5 / 6 / 7-9)."""
+    rng = np.random.default_rng(8)
+    gx, gy = np.meshgrid(np.linspace(0, 1, 96), np.linspace(0, 1, 64))
+    d = np.stack([gx, gy, 0.5 + 0.01 * rng.standard_normal(gx.shape)], axis=2).astype(np.float32)
+    sizes, want = {}, np.round(np.clip(d, 0, 1) * 255)
+    for level, flevel in ((0, 0), (1, 0), (6, 2), (9, 3)):
+        p = hio.write_display(tmp_path / f"o{level}.png", d, compression=level)
+        px, chunks = _decode_png(p.read_bytes())
+        np.testing.assert_array_equal(px, want)
+        assert chunks[b"IDAT"][1] >> 6 == flevel  # FLEVEL bits of the zlib header
+        sizes[level] = len(chunks[b"IDAT"])
+    assert sizes[0] > sizes[1] > sizes[9]
+    pt = hio.write_display(tmp_path / "o.tif", d, compression=1)
+    from PIL import Image
+
+    with Image.open(pt) as im:
+        np.testing.assert_array_equal(np.asarray(im), want)
+    for bad in (-1, 10, 2.5, True, "6"):
+        with pytest.raises(ValueError, match="compression"):
+            hio.write_display(tmp_path / "bad.png", d, compression=bad)
+    assert not (tmp_path / "bad.png").exists()
+
+
 def test_write_display_jpeg_tiff_and_integers(tmp_path):
     from PIL import Image
 
