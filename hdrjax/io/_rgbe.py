@@ -39,6 +39,7 @@ MAX_DIM = 1 << 20
 
 _HEADER_LIMIT = 1 << 16
 _BLOCK_BYTES = 1 << 21  # input bytes expanded per step (cache-sized temporaries)
+_HEAD = np.arange(256, dtype=np.int64)  # RLE header byte values (see _rle_plan)
 _RES_RE = re.compile(rb"^([-+])([XY]) +(\d+) +([-+])([XY]) +(\d+)\s*$")
 
 # value of mantissa m with exponent e: m * 2**(e - 136); e = 0 means zero.
@@ -167,40 +168,39 @@ def _rle_plan(buf: np.ndarray, nscan: int, length: int, name: str) -> tuple[np.n
         raise ReadError(f"{name}: corrupt Radiance run-length data at scanline 0")
     k = cand.size
     target = 4 * length
-    pos = cand + 4
-    filled = np.zeros(k, np.int64)  # pixels decoded so far in this scanline (4 components)
+    # One run header per step for every candidate at once; the per-step work is kept to a
+    # few NumPy calls (small files are dominated by their count). Header byte h stands for
+    # MAG[h] pixels and the next header is ADV[h] bytes on; h = 0 is invalid and gets a
+    # count past the end of any scanline, so its walk ends at once as not exact. Positions
+    # past the data read its last byte; such walks end past the data and are refused below.
+    mag = np.where(_HEAD < 128 + 1, _HEAD, _HEAD - 128)
+    mag[0] = target + 1
+    adv = np.where(_HEAD > 128, 2, 1 + _HEAD)
+    last = n - 1
+    ids = np.arange(k)
+    p = cand + 4
+    f = np.zeros(k, np.int64)  # pixels decoded so far in this scanline (4 components)
     ends = np.full(k, -1, np.int64)
-    active = np.arange(k)
     rec_p: list[np.ndarray] = []
-    rec_n: list[np.ndarray] = []
+    rec_f: list[np.ndarray] = []
     rec_c: list[np.ndarray] = []
     budget = 16 * nscan * length + (1 << 20)  # work bound: linear in the image size
-    while active.size:
-        budget -= active.size
+    while ids.size:
+        budget -= ids.size
         if budget < 0:
             raise ReadError(f"{name}: corrupt Radiance run-length data (runaway decoding)")
-        p = pos[active]
-        h = buf[np.minimum(p, n - 1)].astype(np.int64)
-        is_run = h > 128
-        cnt = np.where(is_run, h - 128, h)
-        f = filled[active]
-        # a component ends exactly at a multiple of length: runs must not straddle it
-        room = length - f % length
-        nxt = p + np.where(is_run, 2, 1 + cnt)
-        ok = (p < n) & (cnt > 0) & (cnt <= room) & (nxt <= n)
-        if not ok.all():
-            active, p, cnt, f, nxt = active[ok], p[ok], cnt[ok], f[ok], nxt[ok]
-            is_run = is_run[ok]
+        h = buf[np.minimum(p, last)]
         rec_p.append(p)
-        rec_n.append(np.where(is_run, -cnt, cnt))  # negative: a run
-        rec_c.append(active)
-        pos[active] = nxt
-        f = f + cnt
-        filled[active] = f
-        done = f == target
+        rec_f.append(f)
+        rec_c.append(ids)
+        f = f + mag[h]
+        p = p + adv[h]
+        done = f >= target
         if done.any():
-            ends[active[done]] = nxt[done]
-            active = active[~done]
+            exact = done & (f == target) & (p <= n)
+            ends[ids[exact]] = p[exact]
+            keep = ~done
+            ids, p, f = ids[keep], p[keep], f[keep]
     # the chain of real scanlines (one Python step per scanline)
     idx_of = dict(zip(cand.tolist(), range(k), strict=True))
     chain = np.empty(nscan, np.int64)
@@ -217,12 +217,19 @@ def _rle_plan(buf: np.ndarray, nscan: int, length: int, name: str) -> tuple[np.n
         at = int(ends[i])
     starts[nscan] = at
     all_p = np.concatenate(rec_p)
-    all_n = np.concatenate(rec_n)
+    all_f = np.concatenate(rec_f)
     if k > nscan:  # drop the records of false candidates
         on_chain = np.zeros(k, bool)
         on_chain[chain] = True
         keep = on_chain[np.concatenate(rec_c)]
-        all_p, all_n = all_p[keep], all_n[keep]
+        all_p, all_f = all_p[keep], all_f[keep]
+    heads_b = buf[all_p].astype(np.int64)
+    cnt = mag[heads_b]
+    # a run or literal must not straddle the end of a component (a multiple of length)
+    if np.any(all_f % length + cnt > length):
+        row = int(np.searchsorted(starts, all_p[np.argmax(all_f % length + cnt > length)]) - 1)
+        raise ReadError(f"{name}: corrupt Radiance run-length data at scanline {max(row, 0)}")
+    all_n = np.where(heads_b > 128, -cnt, cnt)
     # How often each byte appears in the output: literal data bytes once (the default),
     # run headers and scanline headers never, run value bytes `count` times.
     rep = np.ones(at, np.int8)
