@@ -17,10 +17,20 @@ instead of 4096².
 Other processes on a small machine move the numbers (both sides run in the same process,
 one after the other, so the ratios move less); the load average is recorded with each
 figure.
+
+Huge pages: NumPy asks the kernel for transparent huge pages on large arrays
+(``madvise``), so OpenCV's outputs fault in 2 MiB at a time; XLA's buffers come from
+plain ``malloc`` and fault in 4 KiB pages, which at 4096² costs XLA ~15 ms per fresh
+output that the peers do not pay (on machines where THP is ``madvise``, as is common).
+Run directly, this script therefore restarts itself with
+``GLIBC_TUNABLES=glibc.malloc.hugetlb=1`` (glibc ≥ 2.35) so both sides allocate alike
+(``--no-hugepages`` keeps the environment as it is); each record says which was used
+(``hugepages``).
 """
 
 import argparse
 import os
+import sys
 
 import _harness as H
 import jax
@@ -38,6 +48,14 @@ def _load() -> float:
         return round(os.getloadavg()[0], 2)
     except OSError:
         return float("nan")
+
+
+HUGEPAGES_TUNABLE = "glibc.malloc.hugetlb=1"
+
+
+def _hugepages() -> bool:
+    """Whether glibc's malloc asks for transparent huge pages in this process."""
+    return HUGEPAGES_TUNABLE in os.environ.get("GLIBC_TUNABLES", "")
 
 
 def _timed(fn, n: int) -> dict[str, float]:
@@ -61,7 +79,7 @@ def bench_size(h: int, w: int, runs: int, rng, quick: bool = False) -> list[dict
     x = rng.lognormal(0.0, 2.0, size=(h, w)).astype(np.float32)
     xj = jnp.asarray(x)
     size = f"{w}x{h}"
-    px = {"pixels": h * w}
+    px = {"pixels": h * w, "hugepages": _hugepages()}
     small = h * w < 2e6  # SciPy and the larger windows only at the small size
     big = h * w > 5e7
     n = 2 if big else runs
@@ -147,5 +165,13 @@ if __name__ == "__main__":
     ap.add_argument("--big", action="store_true", help="15000×15000 even in quick mode")
     ap.add_argument("--no-big", action="store_true", help="full mode without 15000×15000")
     ap.add_argument("--runs", type=int, default=5, help="timed runs per case")
+    ap.add_argument(
+        "--no-hugepages", action="store_true", help="do not restart with glibc huge pages"
+    )
     a = ap.parse_args()
+    if not a.no_hugepages and not _hugepages():
+        tun = ":".join(t for t in (os.environ.get("GLIBC_TUNABLES"), HUGEPAGES_TUNABLE) if t)
+        os.execve(
+            sys.executable, [sys.executable, *sys.argv], {**os.environ, "GLIBC_TUNABLES": tun}
+        )
     run(a.quick, big=True if a.big else False if a.no_big else None, runs=a.runs)

@@ -21,13 +21,30 @@ that measuring and the downscale on both sides.
 **Peer.** A NumPy float64 implementation of the same operators and targets written here
 (:func:`np_reinhard`, :func:`np_tumblin_reinhard`, :func:`np_statistics`: luminance
 clipped to [0, 1], ``numpy.percentile`` over the positive pixels, as the targets define
-them), solved by ``scipy.optimize.least_squares(method="lm")`` (MINPACK
-Levenberg–Marquardt, forward-difference Jacobian) with ``xtol = ftol = 1e-5``. hdrjax runs
-float32 (its default) with optimistix Levenberg–Marquardt, ``rtol = 1e-5``, ``atol = 1e-6``
-(its float32 defaults; a Cauchy test on the parameters and the residuals). The two
-termination tests are not identical, so both fitted parameter sets, losses and iteration
-counts are recorded: hdrjax ``steps`` are solver steps, scipy ``nfev`` are residual
-evaluations including those of its finite-difference Jacobian.
+them), solved by ``scipy.optimize.least_squares(method="lm")`` (MINPACK ``lmder``,
+Levenberg–Marquardt, forward-difference Jacobian) with ``xtol = ftol = 1e-5`` (``gtol``
+1e-8, its default). hdrjax runs float32 (its default) with optimistix Levenberg–Marquardt,
+``rtol = 1e-5``, ``atol = 1e-6`` (its float32 defaults).
+
+**Tolerances, side by side.** Both work on ``z = ln p``. MINPACK stops when the trust
+radius ``Δ ≤ xtol·‖D z‖`` (a relative step in scaled ``z``), or when the actual and the
+predicted relative reductions of ``‖r‖²`` are both ``≤ ftol``; optimistix stops after an
+accepted step with ``max|Δz| < atol + rtol·max|z|`` *and* ``max|Δr| < atol + rtol·max|r|``.
+The step tests are the same quantity (relative change of ``ln p`` below 1e-5); on these
+zero-residual problems the ``ftol`` test never fires (each step removes most of ``‖r‖²``)
+and scipy stops on ``xtol`` (status 3), optimistix on both tests once ``|Δr| < 1e-6``
+(float32 resolves these statistics to ~1e-7, so the test can fire). Both end within ~2e-6 of each
+other (``max_rel_param_diff``). What differs is the path: MINPACK tries the full
+Gauss–Newton step first (radius ``100‖D z₀‖``); optimistix's LM starts with damping
+``λ = 1`` in ``z`` units (short gradient-like steps when ``JᵀJ ≪ 1``, as here) and divides
+it by 3.5 only after a step that did as well as predicted, so it spends ~5–8 steps
+shrinking ``λ``. Counted as work: an hdrjax step is one residual and one Jacobian (one
+forward sweep with 2 tangents); scipy's ``nfev`` counts trial points only, and
+``residual_calls`` counts every call of the NumPy residual, including the two per
+finite-difference Jacobian (reinhard2002: 8 trial points, 22 calls; tumblin_reinhard: 5,
+15). A full Gauss–Newton first step (``optx.IndirectLevenbergMarquardt``, ``optx.Dogleg``)
+halves hdrjax's steps here but jumps to ``L_white → ∞`` (no gradient) on the Cornell-box
+recovery test, so it is not the default.
 
 **Batch.** 64 frames of 256×128, a slow pan: frame ``k`` is the window of ¾ the image's
 width and height whose corner moves linearly from the top left to the bottom right,
@@ -37,10 +54,13 @@ is fitted independently (reinhard2002, same targets and start; box-filtered to 6
 fit): one ``hdrjax.fit.fit_batch`` call (default, and ``vectorize=True``) against a loop of
 ``hdrjax.fit.fit`` calls and a loop of scipy fits; all reported per frame.
 
-**Not benchmarked: fits at full resolution with percentile targets.** A percentile needs a
-sort; XLA:CPU sorts ~0.4 Mpixel/s on this machine (``numpy.percentile``'s partial sort is
-~10× faster), so one Levenberg–Marquardt step on 2 Mpixels costs several seconds — the
-reason ``hdrjax.fit`` works on a downscaled image by default. In ``full`` mode a
+**Not benchmarked: fits at full resolution with percentile targets.** A percentile needs an
+order statistic. :class:`hdrjax.targets.Percentiles` selects the few largest (or smallest)
+values with ``jax.lax.top_k`` for percentiles away from the median (P99 of the 64×32 fit:
+~15 µs against ~220 µs for XLA:CPU's sort), but a percentile near the median still sorts,
+~0.4 Mpixel/s on XLA:CPU (``numpy.percentile``'s partial sort is ~10× faster), several
+seconds per step on 2 Mpixels — the reason ``hdrjax.fit`` works on a downscaled image by
+default. In ``full`` mode a
 full-resolution fit with sort-free targets (mean 0.2, soft clipped fraction 0.01) is timed
 instead, both sides at 2048×1024.
 
@@ -156,13 +176,17 @@ def scipy_fit(method: str, rgb: np.ndarray, start, max_size, kind="percentile"):
 
     small = np_downscale(rgb, max_size).astype(np.float64)  # box filter in float32
 
+    calls = [0]
+
     def residuals(z):
+        calls[0] += 1
         with np.errstate(all="ignore"):  # trial steps may under/overflow exp(z)
             return np_statistics(model(small, np.exp(z)), kind) - want
 
     sol = scipy.optimize.least_squares(
         residuals, np.log(np.asarray(start, np.float64)), method="lm", xtol=RTOL, ftol=RTOL
     )
+    sol.residual_calls = calls[0]
     return sol
 
 
@@ -240,6 +264,7 @@ def fit_pair(case, method, rgb, x, max_size, kind="percentile", repeats=(7, 7), 
         **common,
         dtype="float32",
         steps=int(res.steps),
+        tolerance=f"optimistix LM rtol={RTOL:g} atol={ATOL:g} (max|dz|, max|dr| Cauchy test)",
         loss=float(res.loss),
         converged=bool(res.success),
         params=ours,
@@ -255,6 +280,8 @@ def fit_pair(case, method, rgb, x, max_size, kind="percentile", repeats=(7, 7), 
         **common,
         dtype="float64",
         nfev=int(sol.nfev),
+        residual_calls=int(sol.residual_calls),
+        tolerance=f"MINPACK lm xtol=ftol={RTOL:g} gtol=1e-8",
         loss=float(np.sum(sol.fun**2)),
         converged=bool(sol.success),
         params=theirs,

@@ -206,10 +206,12 @@ def machine_line(meta: dict) -> str:
     m, v, j = meta.get("machine", {}), meta.get("versions", {}), meta.get("jax", {})
     ram = f", {m['ram_gb']:g} GB RAM" if m.get("ram_gb") else ""
     dev = j.get("device_kind", "")
+    tun = f"; GLIBC_TUNABLES={m['glibc_tunables']}" if m.get("glibc_tunables") else ""
     return (
         f"{m.get('cpu_model', '?')} ({m.get('cpu_count', '?')} cores{ram}), "
         f"{m.get('platform', '?')}; JAX {v.get('jax', '?')} on {j.get('backend', '?')}"
         + (f" ({dev})" if dev and dev.lower() != j.get("backend") else "")
+        + tun
     )
 
 

@@ -124,6 +124,8 @@ def machine() -> dict[str, Any]:
         "cpu_usable": usable,
         "ram_gb": _ram_gb(),
         "load_average_at_start": load,
+        # glibc.malloc.hugetlb=1 (make bench): XLA's buffers get huge pages like NumPy's
+        "glibc_tunables": os.environ.get("GLIBC_TUNABLES", ""),
     }
 
 

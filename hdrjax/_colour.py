@@ -12,6 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from . import _check
+
 REC709_CHROMATICITIES: tuple[float, ...] = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
 """(x_r, y_r, x_g, y_g, x_b, y_b, x_w, y_w) of Rec.709/sRGB primaries with a D65 white."""
 
@@ -85,6 +87,8 @@ def luminance(
     Returns:
         Luminance in the image's units, shape ``rgb.shape[:-1]``.
     """
+    _check.weights(weights)
+    _check.real(rgb, "rgb")
     rgb = jnp.asarray(rgb)
     if rgb.ndim < 1 or rgb.shape[-1] != 3:
         raise ValueError(f"rgb: expected channels-last RGB (..., 3), got shape {rgb.shape}")

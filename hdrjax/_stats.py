@@ -8,24 +8,40 @@ positive luminance, except the paper's log-average, which clamps negatives to ze
 
 Percentiles default to a histogram of ``ln L`` (``bins`` equal bins between the smallest and
 largest positive value) instead of a sort: XLA's CPU sort runs on one core at ~0.7 Mpixel/s,
-so a 4096² sort costs ~20 s while the histogram costs ~60 ms. Within the bin that holds the
-requested rank the value is interpolated linearly in ``ln L``; the true percentile lies in
-the same bin, so the estimate is within one bin width (in ``ln L``) of the order statistic
-``x_(floor(q (n-1)))`` and its relative error is at most ``expm1((ln max - ln min) / bins)``
-— returned as ``rel_error_bound``. (``numpy.percentile`` also interpolates towards the next
-order statistic; that step is not reproduced, which matters only where two consecutive
-values are further apart than a bin, i.e. for tiny pixel counts.) With the default
-8192 bins and a 30-stop image that is 0.25 %. ``method="exact"`` sorts (the same linear
-interpolation as ``numpy.percentile``) and is differentiable; the histogram result is a
-constant for ``jax.grad``.
+so a 4096² sort costs ~20 s while the histogram costs ~45 ms of CPU time. Within the bin
+that holds the requested rank the value is interpolated linearly in ``ln L``; the true
+percentile lies in the same bin, so the estimate is within one bin width (in ``ln L``) of
+the order statistic ``x_(floor(q (n-1)))`` and its relative error is at most
+``expm1((ln max - ln min) / bins)`` — returned as ``rel_error_bound``. (``numpy.percentile`` also
+interpolates towards the next order statistic; that step is not reproduced, which matters
+only where two consecutive values are further apart than a bin, i.e. for tiny pixel counts.)
+With the default 8192 bins and a 30-stop image that is 0.25 %. ``method="exact"`` sorts (the
+same linear interpolation as ``numpy.percentile``) and is differentiable; the histogram
+result is a constant for ``jax.grad``.
+
+Speed on XLA:CPU (what shapes the code): a reduction over a plain expression of ``L`` is
+fused and vectorised, but one over a mask or a select is not, and every intermediate that
+feeds a scatter or an unfusable reduction becomes a fresh full-size buffer (page faults
+and writes cost more than the arithmetic). So an image whose pixels are all finite and
+positive takes plain ``min``/``max``/``sum`` reductions; masks, ``ln L``, bin indices and
+the histogram's scatter run over 1 MiB blocks in a loop, where their temporaries stay in
+cache (:func:`_blockwise`); the histogram is four interleaved copies (filled by two
+independent loops). The blocked passes are ``custom_jvp`` functions whose derivatives are
+those of the plain ``jnp`` formulas (extrema: shared by tied pixels; log-averages: the
+chain rule), so gradients are unchanged.
 """
 
-from typing import Literal
+import functools
+from collections.abc import Callable
+from typing import Any, Literal
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
+
+from . import _check
 
 DEFAULT_BINS = 8192
 DEFAULT_DELTA = 1e-6
@@ -105,6 +121,136 @@ def _hist_quantiles(counts: Array, lo: Array, width: Array, qs: Array) -> Array:
     return jnp.exp(lo + (b.astype(lo.dtype) + frac) * width)
 
 
+BLOCK = 1 << 18
+"""Elements per block of the blocked passes (1 MiB of float32)."""
+
+
+def _blockwise(fn: Callable, carry: Any, *arrays: Array, part: tuple[int, int] = (0, 1)):
+    """``carry, out = fn(carry, *blocks)`` over consecutive :data:`BLOCK`-element blocks of
+    the flattened ``arrays`` (then the ragged tail); the per-block outputs are stacked.
+    ``part=(k, m)`` visits only the k-th of m equal runs of blocks (the tail goes with the
+    last), so that m independent loops can run on m cores.
+
+    Why blocks: XLA:CPU materialises every intermediate that feeds a scatter or a reduction
+    it cannot fuse (a mask, ``ln L``, bin indices, the scatter's ones), each a fresh
+    full-size buffer whose page faults and writes cost more than the arithmetic. Inside a
+    loop over blocks these temporaries are 1 MiB, reused and cache-resident.
+    """
+    flat = [a.reshape(-1) for a in arrays]
+    n = flat[0].shape[0]
+    nb, rest = divmod(n, BLOCK)
+    k, m = part
+    first, last = nb * k // m, nb * (k + 1) // m
+    outs = []
+    if last > first:
+
+        def body(c, i):
+            return fn(c, *(jax.lax.dynamic_slice_in_dim(a, i * BLOCK, BLOCK) for a in flat))
+
+        carry, ys = jax.lax.scan(body, carry, jnp.arange(first, last, dtype=jnp.int32))
+        outs.append(ys)
+    if k == m - 1 and (rest or not outs):
+        carry, y = fn(carry, *(a[nb * BLOCK :] for a in flat))
+        outs.append(jax.tree.map(lambda v: jnp.asarray(v)[None], y))
+    if len(outs) < 2:
+        return carry, (outs[0] if outs else None)
+    return carry, jax.tree.map(lambda a, b: jnp.concatenate([a, b]), *outs)
+
+
+def _bin_index(lnL: Array, pos: Array, lo: Array, width: Array, bins: int) -> Array:
+    """Histogram bin of each ``ln L`` on ``[lo, lo + bins · width]``, or ``bins`` (one past
+    the last) outside ``pos`` (hdrjax.tile reproduces this formula)."""
+    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
+    return jnp.where(pos, idx, bins)
+
+
+SUB_HISTOGRAMS = 4
+"""Interleaved copies of the histogram: consecutive pixels, often in the same bin, update
+different copies, so the scatter loop does not wait on its own previous store."""
+
+
+def _histogram(L: Array, valid: Array | None, lo: Array, width: Array, bins: int) -> Array:
+    """Counts of the valid (finite, ≥ tiny) pixels of ``L`` in ``bins`` bins of ``ln L``."""
+    big, tiny = float(jnp.finfo(L.dtype).max), float(jnp.finfo(L.dtype).tiny)
+    L = jax.lax.stop_gradient(L)
+    k = SUB_HISTOGRAMS
+
+    def block(counts, Lb, *vb):
+        pos = (Lb >= tiny) & (Lb <= big)  # finite and positive (NaN compares false)
+        if vb:
+            pos = pos & vb[0]
+        idx = _bin_index(jnp.log(jnp.maximum(Lb, tiny)), pos, lo, width, bins)
+        # pixel i counts in copy i mod k; excluded pixels (idx = bins) land past the end
+        idx = idx + (jnp.arange(Lb.shape[0], dtype=jnp.int32) % k) * (bins + 1)
+        return counts.at[idx].add(1, mode="drop"), None
+
+    args = (L,) if valid is None else (L, valid)
+    # two independent loops (halves of the image), which XLA:CPU's thunk runtime may run
+    # on two cores (no gain was measurable on a loaded 2-core machine; none is lost)
+    zero = jnp.zeros(k * (bins + 1), jnp.int32)
+    halves = [_blockwise(block, zero, *args, part=(j, 2))[0] for j in range(2)]
+    return (halves[0] + halves[1]).reshape(k, bins + 1)[:, :bins].sum(axis=0)
+
+
+def _histogram_percentiles(
+    L: Array,
+    valid: Array | None,
+    n: Array,
+    lo: Array,
+    hi: Array,
+    qs: Array,
+    bins: int,
+) -> tuple[Array, Array]:
+    """Percentiles from a histogram of ``ln L`` over ``valid`` (default: the finite pixels
+    ``≥ tiny``) on [lo, hi] (see the module docstring)."""
+    lo = jnp.where(n > 0, lo, 0.0)
+    hi = jnp.where(n > 0, hi, 0.0)
+    width = jnp.maximum(hi - lo, 1e-20) / bins
+    counts = _histogram(L, valid, lo, width, bins)
+    vals = jnp.clip(_hist_quantiles(counts, lo, width, qs), jnp.exp(lo), jnp.exp(hi))
+    return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, jnp.expm1(width), 0.0)
+
+
+def _positive_range(L: Array, valid: Array | None) -> tuple[Array, Array, Array, Array]:
+    """``(n_valid, n_positive, min, max)``: the valid pixels (finite, and in ``valid`` when
+    given) and, among them, those ``≥ tiny`` with their extrema (1 when there are none).
+    Constants for ``jax.grad``. Without a mask an image whose pixels are all finite and
+    ``≥ tiny`` takes plain reductions; otherwise one blocked pass."""
+    L = jax.lax.stop_gradient(L)
+    dt = L.dtype
+    big, tiny = float(jnp.finfo(dt).max), float(jnp.finfo(dt).tiny)
+    i32 = jnp.int32
+
+    def block(c, Lb, *vb):
+        fin = (Lb >= -big) & (Lb <= big)
+        if vb:
+            fin = fin & vb[0]
+        pos = fin & (Lb >= tiny)
+        return c, (
+            jnp.sum(fin, dtype=i32),
+            jnp.sum(pos, dtype=i32),
+            jnp.min(jnp.where(pos, Lb, big), initial=big),
+            jnp.max(jnp.where(pos, Lb, 0.0), initial=0.0),
+        )
+
+    def masked(*args):
+        _, (nv, n, mn, mx) = _blockwise(block, None, *args)
+        nv, n = jnp.sum(nv, dtype=i32), jnp.sum(n, dtype=i32)
+        return nv, n, jnp.where(n > 0, jnp.min(mn), 1.0), jnp.where(n > 0, jnp.max(mx), 1.0)
+
+    if valid is not None:
+        return masked(L, valid)
+    # XLA:CPU's min/max skip NaN in large arrays: the sum tells NaN and ±Inf apart
+    lmin, lmax = jnp.min(L, initial=big), jnp.max(L, initial=tiny)
+    clean = (lmin >= tiny) & jnp.isfinite(jnp.sum(L))
+    n_pix = jnp.asarray(L.size, i32)
+
+    def fast(L, lmin, lmax):
+        return n_pix, n_pix, lmin, lmax
+
+    return jax.lax.cond(clean, fast, lambda L, *_: masked(L), L, lmin, lmax)
+
+
 def percentile(
     L: Float[ArrayLike, "..."],
     q: Float[ArrayLike, "*Q"],
@@ -126,40 +272,146 @@ def percentile(
     Returns:
         ``(values, rel_error_bound)``; values are NaN when no pixel qualifies.
     """
+    _check.in_range(q, "q", 0, 100)
+    _check.real(L, "L")
     if method not in ("histogram", "exact"):
         raise ValueError(f"method: expected 'histogram' or 'exact', got {method!r}")
     if int(bins) < 2:
         raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
     L = _float(L)
     qs = jnp.asarray(q, dtype=L.dtype) / 100.0
-    # "positive" means at least the smallest normal float: XLA:CPU flushes subnormals
-    valid = jnp.isfinite(L) & (L >= jnp.finfo(L.dtype).tiny)
-    if where is not None:
-        valid = valid & jnp.broadcast_to(jnp.asarray(where, bool), L.shape)
-    n = jnp.sum(valid)
+    mask = None if where is None else jnp.broadcast_to(jnp.asarray(where, bool), L.shape)
     if method == "exact":
+        # "positive" means at least the smallest normal float: XLA:CPU flushes subnormals
+        valid = jnp.isfinite(L) & (L >= jnp.finfo(L.dtype).tiny)
+        if mask is not None:
+            valid = valid & mask
+        n = jnp.sum(valid)
         vals = jnp.nanquantile(jnp.where(valid, L, jnp.nan).reshape(-1), qs)
         return jnp.where(n > 0, vals, jnp.nan), jnp.zeros((), L.dtype)
-    Ls = jax.lax.stop_gradient(L)
-    lnL = jnp.log(jnp.where(valid, Ls, 1.0))
-    lo = jnp.min(jnp.where(valid, lnL, jnp.inf))
-    hi = jnp.max(jnp.where(valid, lnL, -jnp.inf))
-    return _histogram_percentiles(lnL, valid, n, lo, hi, qs, int(bins))
+    _, n, mn, mx = _positive_range(L, mask)
+    return _histogram_percentiles(L, mask, n, jnp.log(mn), jnp.log(mx), qs, int(bins))
 
 
-def _histogram_percentiles(
-    lnL: Array, valid: Array, n: Array, lo: Array, hi: Array, qs: Array, bins: int
-) -> tuple[Array, Array]:
-    """Percentiles from a histogram of ``lnL`` over ``valid`` on [lo, hi] (see module doc)."""
-    lo = jnp.where(n > 0, lo, 0.0)
-    hi = jnp.where(n > 0, hi, 0.0)
-    width = jnp.maximum(hi - lo, 1e-20) / bins
-    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
-    # excluded pixels get an out-of-range index, dropped by the scatter (no select)
-    idx = idx + (1 - valid.astype(jnp.int32)) * bins
-    counts = jnp.zeros(bins, jnp.int32).at[idx.reshape(-1)].add(1, mode="drop")
-    vals = jnp.clip(_hist_quantiles(counts, lo, width, qs), jnp.exp(lo), jnp.exp(hi))
-    return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, jnp.expm1(width), 0.0)
+def _extrema_and_sums(L: Array, assume_finite: bool, delta: float):
+    """One blocked pass: ``(n_finite, n_positive, min, max, min_positive, Σ log-terms)``
+    over the finite pixels, the log-terms being ``ln(delta + max(L, 0))``."""
+    dt = L.dtype
+    big, tiny = float(jnp.finfo(dt).max), float(jnp.finfo(dt).tiny)
+
+    def block(c, Lb):
+        if assume_finite:
+            n_fin = jnp.asarray(Lb.size, jnp.int32)
+            Lz = Lb
+            lmin, lmax = jnp.min(Lb, initial=big), jnp.max(Lb, initial=-big)
+            terms = jnp.log(delta + jnp.maximum(Lb, 0.0))
+        else:
+            fin = jnp.isfinite(Lb)
+            Lz = jnp.where(fin, Lb, 0.0)
+            n_fin = jnp.sum(fin, dtype=jnp.int32)
+            lmin = jnp.min(jnp.where(fin, Lb, big), initial=big)
+            lmax = jnp.max(jnp.where(fin, Lb, -big), initial=-big)
+            terms = jnp.where(fin, jnp.log(delta + jnp.maximum(Lz, 0.0)), 0.0)
+        pos = Lz >= tiny  # subnormals are flushed to 0 on CPU
+        return c, (
+            n_fin,
+            jnp.sum(pos, dtype=jnp.int32),
+            lmin,
+            lmax,
+            jnp.min(jnp.where(pos, Lz, big), initial=big),
+            jnp.sum(terms),
+        )
+
+    _, (n_fin, n_pos, lmin, lmax, minpos, s) = _blockwise(block, None, L)
+    i32 = jnp.int32
+    n_fin, n_pos = jnp.sum(n_fin, dtype=i32), jnp.sum(n_pos, dtype=i32)
+    return n_fin, n_pos, jnp.min(lmin), jnp.max(lmax), jnp.min(minpos), jnp.sum(s)
+
+
+def _tie_weights(L: Array, value: Array, mask: Array) -> Array:
+    """JAX's derivative of a min/max reduction: shared equally by the tied elements."""
+    hit = mask & (L == value)
+    return hit / jnp.maximum(jnp.sum(hit), 1).astype(L.dtype)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(1, 2))
+def _summary(L: Array, assume_finite: bool, delta: float):
+    """``(n_finite, n_positive, min, max, min_positive, Σ ln(delta + max(L, 0)))`` over
+    the finite pixels, with the derivatives of the plain ``jnp`` formulas.
+
+    Fast path, taken when every pixel is finite and ≥ tiny: plain reductions that XLA:CPU
+    fuses and vectorises. NaN, ±Inf or L ≤ 0 make the sum of logs non-finite (XLA:CPU's
+    min/max skip NaN in large arrays, so they cannot tell); such images take the masked
+    blocked pass :func:`_extrema_and_sums`.
+    """
+    dt = L.dtype
+    big, tiny = float(jnp.finfo(dt).max), float(jnp.finfo(dt).tiny)
+    n_pix = jnp.asarray(L.size, jnp.int32)
+    lmin, lmax = jnp.min(L, initial=big), jnp.max(L, initial=-big)
+    log_sum = jnp.sum(jnp.log(delta + L))
+    clean = (lmin >= tiny) & jnp.isfinite(log_sum)
+
+    def fast(L, lmin, lmax, log_sum):
+        return n_pix, n_pix, lmin, lmax, lmin, log_sum
+
+    def masked(L, *_):
+        return _extrema_and_sums(L, assume_finite, delta)
+
+    return jax.lax.cond(clean, fast, masked, L, lmin, lmax, log_sum)
+
+
+@_summary.defjvp
+def _summary_jvp(assume_finite, delta, primals, tangents):
+    (L,), (t,) = primals, tangents
+    out = _summary(L, assume_finite, delta)
+    _, _, lmin, lmax, minpos, _ = out
+    dt = L.dtype
+    fin = jnp.isfinite(L)
+    Lz = jnp.where(fin, L, 0.0)
+    t = jnp.where(fin, t, 0.0)
+    # d/dx max(x, 0) is 1/2 at 0 in JAX; the tangent of ln(delta + max(L, 0))
+    slope = jnp.where(Lz > 0, 1.0, jnp.where(Lz == 0, 0.5, 0.0)).astype(dt)
+    pos = Lz >= jnp.finfo(dt).tiny
+    zero_i = np.zeros((), jax.dtypes.float0)
+    dots = (
+        jnp.sum(t * _tie_weights(Lz, lmin, fin)),
+        jnp.sum(t * _tie_weights(Lz, lmax, fin)),
+        jnp.sum(t * _tie_weights(Lz, minpos, pos)),
+        jnp.sum(t * slope / (delta + jnp.maximum(Lz, 0.0))),
+    )
+    return out, (zero_i, zero_i, *dots)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(2,))
+def _kept_sum(L: Array, p99: Array, assume_finite: bool) -> tuple[Array, Array]:
+    """Count and ``Σ ln L`` of the finite pixels with ``tiny ≤ L ≤ p99``, in one blocked
+    pass; the derivative is that of the plain formula (``p99`` enters only a comparison)."""
+    tiny = float(jnp.finfo(L.dtype).tiny)
+
+    def block(c, Lb):
+        kept = (Lb >= tiny) & (Lb <= p99)  # NaN compares false, +Inf exceeds p99
+        if assume_finite:  # ln of the clipped value: finite, and exact where kept
+            lnL = jnp.log(jnp.clip(Lb, tiny, p99))
+        else:  # a select keeps NaN out of the dot product
+            lnL = jnp.where(kept, jnp.log(jnp.maximum(Lb, tiny)), 0.0)
+        # a sum and a dot product of materialised (cache-resident) operands, not masked
+        # sums: XLA:CPU does not vectorise a select inside a reduction
+        keptf, lnL = jax.lax.optimization_barrier((kept.astype(Lb.dtype), lnL))
+        return c, (jnp.sum(keptf).astype(jnp.int32), jnp.dot(keptf, lnL))
+
+    _, (n, s) = _blockwise(block, None, L)
+    return jnp.sum(n, dtype=jnp.int32), jnp.sum(s)
+
+
+@_kept_sum.defjvp
+def _kept_sum_jvp(assume_finite, primals, tangents):
+    (L, p99), (t, _) = primals, tangents
+    out = _kept_sum(L, p99, assume_finite)
+    tiny = jnp.finfo(L.dtype).tiny
+    kept = (L >= tiny) & (L <= p99)
+    # d/dx ln(max(x, tiny)) is 1/x above tiny and 1/(2 tiny) at it (JAX's tie rule)
+    slope = jnp.where(L > tiny, 1.0, 0.5) / jnp.where(kept, L, 1.0)
+    return out, (np.zeros((), jax.dtypes.float0), jnp.sum(jnp.where(kept, t * slope, 0.0)))
 
 
 def measure(
@@ -176,56 +428,40 @@ def measure(
     extrema and log-averages; histogram percentiles are constants (see module docstring).
     ``assume_finite=True`` skips the NaN/Inf masking (the operators check this first).
 
-    Masks are applied by multiplying with 0/1 floats and extrema by pushing excluded pixels
-    to ±float max: on XLA:CPU a ``where`` inside a reduction is not vectorised and cost 4–6×
-    a plain sum (benchmarks/bench_reinhard.py).
+    Three passes over ``L`` (module docstring, "Speed"): counts, extrema and the
+    log-average; the histogram on ``[ln min_positive, ln max]``; the trimmed log-average
+    below ``p99``.
     """
+    _check.positive(delta, "delta", zero=True)
+    _check.integer(bins, "bins", 2)
+    _check.one_of(method, "method", ("histogram", "exact"))
+    _check.real(L, "L")
     L = _float(L)
     dt = L.dtype
-    big = float(jnp.finfo(dt).max)
-    if assume_finite:
-        Lz, finf = L, None
-        n_finite = jnp.asarray(L.size, dt)
-    else:
-        finite = jnp.isfinite(L)
-        Lz = jnp.where(finite, L, 0.0)
-        finf = finite.astype(dt)
-        n_finite = accurate_sum(finf)
-    posf = (Lz >= jnp.finfo(dt).tiny).astype(dt)  # subnormals are flushed to 0 on CPU
     n_pix = jnp.asarray(L.size, jnp.int32)
-    n_pos = accurate_sum(posf)
-    any_finite = n_finite > 0
+    n_fin, n_pos, lmin, lmax, minpos, log_sum = _summary(L, bool(assume_finite), float(delta))
+    any_finite = n_fin > 0
     any_pos = n_pos > 0
-    if finf is None:
-        lmin, lmax = jnp.min(Lz), jnp.max(Lz)
-    else:
-        lmin = jnp.where(any_finite, jnp.min(Lz + (1 - finf) * big), 0.0)
-        lmax = jnp.where(any_finite, jnp.max(Lz - (1 - finf) * big), 0.0)
-    minpos = jnp.where(any_pos, jnp.min(Lz + (1 - posf) * big), 1.0)
-    log_terms = jnp.log(delta + jnp.maximum(Lz, 0.0))
-    if finf is not None:
-        log_terms = log_terms * finf
-    log_avg = jnp.exp(accurate_sum(log_terms) / jnp.maximum(n_finite, 1))
-    # one log for the histogram and the trimmed mean; non-positive pixels are masked out
-    lnL = jnp.log(jnp.maximum(Lz, jnp.finfo(dt).tiny))
+    lmin = jnp.where(any_finite, lmin, 0.0)
+    lmax = jnp.where(any_finite, lmax, 0.0)
+    minpos = jnp.where(any_pos, minpos, 1.0)
+    log_avg = jnp.exp(log_sum / jnp.maximum(n_fin, 1).astype(dt))
     qs = jnp.array([0.01, 0.99], dt)
     if method == "exact":
         (p01, p99), err = percentile(L, 100 * qs, method="exact")
     else:
-        lnL_c = jax.lax.stop_gradient(lnL)
         lo = jnp.log(jax.lax.stop_gradient(minpos))
         hi = jnp.log(jax.lax.stop_gradient(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)))
-        (p01, p99), err = _histogram_percentiles(lnL_c, posf, n_pos, lo, hi, qs, int(bins))
+        (p01, p99), err = _histogram_percentiles(L, None, n_pos, lo, hi, qs, int(bins))
     p01 = jnp.where(any_pos, p01, 1.0)
     p99 = jnp.where(any_pos, p99, 1.0)
-    keptf = posf * (Lz <= p99).astype(dt)
-    n_kept = accurate_sum(keptf)
-    trimmed = jnp.exp(accurate_sum(lnL * keptf) / jnp.maximum(n_kept, 1))
+    n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
+    trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1).astype(dt))
     trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
     return LuminanceStats(
         n_pixels=n_pix,
-        n_nonfinite=n_pix - jnp.round(n_finite).astype(jnp.int32),
-        n_positive=jnp.round(n_pos).astype(jnp.int32),
+        n_nonfinite=n_pix - n_fin,
+        n_positive=n_pos,
         min=lmin,
         min_positive=minpos,
         max=lmax,

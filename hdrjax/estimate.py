@@ -28,6 +28,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from . import _check
 from ._colour import REC709_WEIGHTS
 from ._stats import DEFAULT_BINS, DEFAULT_DELTA
 from .display._desaturate import PERCENT_ABOVE, THRESHOLD_FACTOR, highlight_threshold
@@ -154,14 +155,18 @@ def jgt_white(
     :class:`~hdrjax.operators.Reinhard2002` when ``None``), in *scaled* units.
 
     ``L_white = 1.5 · 2^(log2 L_max − log2 L_min − 5)``; where the image spans few zones
-    (``log2(L_max / L_min) ≤ log2 L̄ + 4.415037``, hdritools' guard) it is
-    ``1.5 · L_max · a / L̄_w`` instead. ``key``/``log_average``: the operator's ``a`` and
-    ``L̄_w`` (``None``: the automatic ones, as the operator does).
+    (``log2(L_max / L_min) ≤ log2(s · L̄) + 4.415037`` with ``s = a / L̄_w`` and ``L̄`` the
+    trimmed log-average: hdritools' guard, evaluated in scaled units so that the estimate is
+    scale invariant — hdritools compares with ``log2 L̄`` in image units, see
+    :mod:`hdrjax.operators._reinhard2002`) it is ``1.5 · L_max · s`` instead.
+    ``key``/``log_average``: the operator's ``a`` and ``L̄_w`` (``None``: the automatic
+    ones, as the operator does).
 
     Statistics: ``min_positive``, ``max``, ``log_average_trimmed`` (image units), ``zones``
     (``log2 L_max − log2 L_min``), ``guard`` (whether the guard applied), ``key``,
     ``log_average`` and ``scale = a / L̄_w``.
     """
+    _check.positive(key, "key")
     _check_method(percentile_method, bins)
     x = _image(image)
     k = None if key is None else jnp.asarray(key, x.dtype)
@@ -191,6 +196,7 @@ def log_average(
 
     Statistics: ``delta`` and ``n_pixels`` (the finite pixels averaged).
     """
+    _check.positive(delta, "delta", zero=True)
     return _log_average_impl(_image(image), _weights(weights), float(delta))
 
 

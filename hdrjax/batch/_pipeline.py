@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, UInt
 
+from .. import _check
 from .._colour import luminance
 from ..operators._base import AbstractOperator, Prepared, as_float_image, make_operator
 
@@ -278,6 +279,7 @@ def render_batch(
     that every pixel of every frame is finite (:func:`frame_is_clean`): the operators' unmasked
     path is then used directly (the same result, without the check that selects it).
     """
+    _check.shape(frames, "frames", ndim=4)
     x = pipeline.prepare_batch(frames)
     ops = pipeline.operator if operators is None else operators
 

@@ -40,8 +40,9 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import luminance
-from .._stats import DEFAULT_BINS, percentile
+from .._stats import DEFAULT_BINS, _histogram_percentiles, _positive_range, percentile
 from ..operators._base import as_float_image
 
 PERCENT_ABOVE = 10.0
@@ -63,30 +64,22 @@ def _over_batch(fn, lead: int, *arrays):
     return fn(*arrays)
 
 
-def _counts(L: Array, finite: Array) -> tuple[Array, Array]:
-    """Finite and positive pixels, in one pass (a variadic reduction: on XLA:CPU two
-    reductions of masks read the image twice, at about twice the cost)."""
-
-    def combine(a, b):
-        return a[0] + b[0], a[1] + b[1]
-
-    ops = (
-        finite.astype(jnp.int32).reshape(-1),  # int32 like the init values, also with x64
-        (finite & (L > 0)).astype(jnp.int32).reshape(-1),
-    )
-    return jax.lax.reduce(ops, (jnp.int32(0), jnp.int32(0)), combine, (0,))
-
-
-def _threshold_one(L: Array, finite: Array, method: str, bins: int) -> tuple[Array, Array]:
-    """2 × the luminance exceeded by 10 % of the finite pixels of one image."""
-    n_finite, n_pos = _counts(jax.lax.stop_gradient(L), finite)
+def _threshold_one(L: Array, finite: Array | None, method: str, bins: int) -> tuple[Array, Array]:
+    """2 × the luminance exceeded by 10 % of the finite pixels of one image (``finite``:
+    their mask, ``None`` when every pixel is)."""
+    n_finite, n_pos, lo, hi = _positive_range(L, finite)
     # percentile() ranks the positive pixels only. numpy.percentile's rank of the 90th
     # percentile among all n finite pixels is 0.9 (n − 1); the n − n_pos non-positive ones
     # come first, so among the positive ones it is rank_pos = n_pos − 1 − 0.1 (n − 1).
     frac = 1.0 - PERCENT_ABOVE / 100.0
     rank_pos = n_pos.astype(L.dtype) - 1 - (1 - frac) * (n_finite.astype(L.dtype) - 1)
-    q = 100.0 * jnp.clip(rank_pos / jnp.maximum(n_pos - 1, 1).astype(L.dtype), 0.0, 1.0)
-    value, err = percentile(L, q, method=method, bins=bins, where=finite)
+    q = jnp.clip(rank_pos / jnp.maximum(n_pos - 1, 1).astype(L.dtype), 0.0, 1.0)
+    if method == "exact":
+        value, err = percentile(L, 100.0 * q, method="exact", where=finite)
+    else:
+        lnlo, lnhi = jnp.log(lo), jnp.log(hi)
+        value, err = _histogram_percentiles(L, finite, n_pos, lnlo, lnhi, q[None], bins)
+        value = value[0]
     # the 90th percentile lies among the non-positive pixels: the threshold is 0
     value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
     return THRESHOLD_FACTOR * value, err
@@ -119,9 +112,10 @@ def highlight_threshold(
 
 @functools.partial(jax.jit, static_argnums=(1, 2, 3))
 def _threshold_impl(x, weights, method, bins):
-    finite = _finite_rgb(x)
-    L = luminance(jnp.where(finite[..., None], x, 0.0), weights)
-    return _over_batch(lambda l, f: _threshold_one(l, f, method, bins), x.ndim - 3, L, finite)
+    def one(img):
+        return _clean_or_masked(img, weights, lambda L, f: _threshold_one(L, f, method, bins))
+
+    return _over_batch(one, x.ndim - 3, x)
 
 
 def _finite_rgb(x: Array) -> Array:
@@ -129,19 +123,41 @@ def _finite_rgb(x: Array) -> Array:
     return jnp.isfinite(x[..., 0]) & jnp.isfinite(x[..., 1]) & jnp.isfinite(x[..., 2])
 
 
-def _desaturate_one(x: Array, T: Array, weights, method: str, bins: int) -> Array:
-    finite = _finite_rgb(x)
-    L = luminance(jnp.where(finite[..., None], x, 0.0), weights)
-    if T is None:
-        T, _ = _threshold_one(L, finite, method, bins)
-    L_max = jnp.max(jnp.where(finite, L, -jnp.inf))
-    span = L_max - T
-    ok = span > 0
-    s = jnp.where(ok, jnp.clip((L - T) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
-    safe = jnp.where(finite[..., None], x, 0.0)
-    mean = ((safe[..., 0] + safe[..., 1] + safe[..., 2]) / 3.0)[..., None]
-    out = safe - s[..., None] * (safe - mean)
-    return jnp.where(finite[..., None], out, x)
+def _clean_or_masked(x: Array, weights, fn):
+    """``fn(L, None)`` on the luminance when every channel of every pixel is finite (one
+    sum decides), else ``fn(L, finite)`` with the pixel mask and the non-finite pixels'
+    luminance set to 0. The clean branch skips every mask: on XLA:CPU a select inside a
+    reduction materialises a full-size temporary (:mod:`hdrjax._stats`, "Speed")."""
+    L_raw = luminance(x, weights)
+
+    def clean(x):
+        return fn(L_raw, None)
+
+    def masked(x):
+        finite = _finite_rgb(x)
+        return fn(luminance(jnp.where(finite[..., None], x, 0.0), weights), finite)
+
+    # NaN or ±Inf in a channel makes the luminance sum non-finite (0 · Inf is NaN)
+    return jax.lax.cond(jnp.isfinite(jnp.sum(L_raw)), clean, masked, x)
+
+
+def _desaturate_one(x: Array, T: Array | None, weights, method: str, bins: int) -> Array:
+    def run(L, finite):
+        t = _threshold_one(L, finite, method, bins)[0] if T is None else T
+        if finite is None:
+            L_max = jnp.max(L)
+            safe = x
+        else:
+            L_max = jnp.max(jnp.where(finite, L, -jnp.inf))
+            safe = jnp.where(finite[..., None], x, 0.0)
+        span = L_max - t
+        ok = span > 0
+        s = jnp.where(ok, jnp.clip((L - t) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
+        mean = ((safe[..., 0] + safe[..., 1] + safe[..., 2]) / 3.0)[..., None]
+        out = safe - s[..., None] * (safe - mean)
+        return out if finite is None else jnp.where(finite[..., None], out, x)
+
+    return _clean_or_masked(x, weights, run)
 
 
 def desaturate_highlights(
@@ -174,6 +190,7 @@ def desaturate_highlights(
         >>> out[0, 0].tolist()  # below the threshold: unchanged
         [1.0, 1.0, 1.0]
     """
+    _check.positive(threshold, "threshold", zero=True, finite=False)
     x = as_float_image(rgb)
     _check_method(method, bins)
     w = None if weights is None else tuple(float(v) for v in weights)

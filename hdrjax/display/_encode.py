@@ -14,6 +14,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
+
 SRGB_THRESHOLD = 0.0031308
 
 
@@ -24,6 +26,7 @@ def _clip(x: Array) -> Array:
 
 def srgb_encode(linear: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     """sRGB transfer function (IEC 61966-2-1) after clipping to [0, 1]; differentiable."""
+    _check.real(linear, "linear")
     x = _clip(jnp.asarray(linear, jnp.result_type(float)))
     hi = x > SRGB_THRESHOLD
     powed = 1.055 * jnp.power(jnp.where(hi, x, 1.0), 1.0 / 2.4) - 0.055
@@ -32,6 +35,7 @@ def srgb_encode(linear: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
 
 def srgb_decode(encoded: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     """Inverse of :func:`srgb_encode` on [0, 1]."""
+    _check.real(encoded, "encoded")
     y = _clip(jnp.asarray(encoded, jnp.result_type(float)))
     hi = y > 12.92 * SRGB_THRESHOLD
     return jnp.where(hi, jnp.power((jnp.where(hi, y, 1.0) + 0.055) / 1.055, 2.4), y / 12.92)
@@ -39,6 +43,7 @@ def srgb_decode(encoded: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
 
 def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[Array, "..."]:
     """Plain power law ``x^(1/gamma)`` after clipping to [0, 1]."""
+    _check.real(linear, "linear")
     if not gamma > 0:
         raise ValueError(f"gamma: expected a number > 0, got {gamma!r}")
     x = _clip(jnp.asarray(linear, jnp.result_type(float)))
@@ -48,6 +53,7 @@ def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[A
 
 def quantize(encoded: ArrayLike, bits: Literal[8, 16] = 8) -> np.ndarray:
     """Round encoded [0, 1] values to ``uint8``/``uint16`` (NaN → 0), on the host."""
+    _check.real(encoded, "encoded")
     if bits not in (8, 16):
         raise ValueError(f"bits: expected 8 or 16, got {bits!r}")
     top = (1 << bits) - 1
@@ -62,6 +68,7 @@ def encode(
     gamma: float = 2.2,
 ) -> Float[Array, "..."]:
     """Clip display-referred linear values to [0, 1] and apply a transfer function."""
+    _check.real(linear, "linear")
     if transfer == "srgb":
         return srgb_encode(linear)
     if transfer == "gamma":

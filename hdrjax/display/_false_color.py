@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._stats import percentile
 
 UNDER = "black"
@@ -449,6 +450,7 @@ def false_color(
         >>> fc.image[1].tolist()  # NaN, +Inf, above the range
         [[1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
     """
+    _check.real(values, "values")
     scale = false_color_scale(values, **options)
     image = scale(values)
     v = jnp.asarray(values)

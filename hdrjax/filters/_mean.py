@@ -62,7 +62,9 @@ def mean_filter(
         passes: how many times the filter is applied (0 returns the image).
         mode: edge handling; ``"nearest"`` replicates the edge pixels.
         channel_axis: ``-1`` for channels last, ``None`` for planes.
-        strip_rows: rows per strip (default: about 256 KiB); results do not depend on it.
+        strip_rows: rows per strip; ``None`` (default) runs windows up to 7×7 in one fused
+            pass over the image (no temporaries) and larger ones in strips of about 1 MiB.
+            Results do not depend on it, bit for bit.
 
     Returns:
         The filtered image, same shape and units, float32 (float64 under x64).

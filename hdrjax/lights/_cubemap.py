@@ -16,6 +16,7 @@ from typing import Any
 import jax
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from ..panorama import cubemap_to_equirect
 from ._loghin2019 import detect
 from ._result import Lights
@@ -33,6 +34,7 @@ def cubemap_equirect(
     faces: Float[ArrayLike, "*batch 6 S S 3"], height: int | None = None
 ) -> Float[Array, "*batch h w 3"]:
     """The equirectangular map :func:`detect_cubemap` searches (``height`` default ``2 S``)."""
+    _check.real(faces, "faces")
     shape = jax.numpy.shape(faces)
     if len(shape) < 4 or shape[-4] != 6 or shape[-3] != shape[-2] or shape[-1] != 3:
         raise ValueError(f"faces: expected (..., 6, S, S, 3) cube faces, got shape {shape}")
@@ -55,6 +57,7 @@ def detect_cubemap(
     Returns:
         :class:`~hdrjax.lights.Lights` of the resampled map (``input_shape`` is its size).
     """
+    _check.real(faces, "faces")
     return detect(cubemap_equirect(faces, height), **options)
 
 

@@ -67,6 +67,17 @@ degrees; ``tests/lights/test_detect.py``); a light larger than ``max_radius`` (o
 flat-topped one whose brightest local maximum is on its rim) becomes several lights; at
 most ``max_lights`` lights, ``max_candidates`` candidates and ``4 max_lights`` kept
 candidates (``truncated`` says when a cap was hit).
+
+Speed (XLA:CPU; every choice keeps the results of the plain formulation, bit for bit on
+the test and benchmark maps): the window maximum of step 5 is separable (a column-wise
+maximum over the window's rows, computed once per map, then one value per window column
+and sample); step 8 tests only the pairs ``i < j`` the greedy merge reads; step 9 reads
+each light-window row as one slice (rows across the seam from a strip of the columns
+around it, no padded copy of the map), grows the masks bit-packed (32 rows to a word),
+and resolves pixels two lights reach by a scatter-min of window rows; the median of the
+automatic threshold comes from ``lax.top_k``. A single map (no batch axis) is not
+vmapped, so that steps 8 and 9 branch on the data: with at most ``SMALL_REPS`` kept
+candidates or ``SMALL_LIGHTS`` lights (most maps) they run on those sizes only.
 """
 
 import dataclasses
@@ -80,6 +91,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
 from .._stats import accurate_sum
 from ._result import Lights
@@ -105,6 +117,10 @@ AUTO_PEAK_FACTOR = 0.02
 LDR_FACTOR = 0.8
 """The listing's fixed threshold, as a fraction of the maximum (cap of the automatic one)."""
 MIN_CONTRAST = 2.0
+SMALL_REPS = 32
+"""Kept candidates up to which a single map's line test reads only the first ones."""
+SMALL_LIGHTS = 8
+"""Lights up to which a single map's step 9 looks at only the first ones."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -266,20 +282,21 @@ def _pool_factor(plan: _Plan) -> int:
     return 2 if ok else 1
 
 
-def _window_indices(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Flat indices into the pooled image of every sample's window ``(N, k)``, and the
-    samples' pixels.
+def _search_columns(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Every sample's window columns in the pooled image ``(N, 2 kmax + 1)``, the samples'
+    pixels, and the window's half-height ``rr`` in pooled rows.
 
     A window spans ``±window`` pixels in rows. On the sphere its columns span
     ``±window / cos(el)`` pixels (the same angle as at the equator; at most half the
     row), read every ``1 / cos(el)`` pixels — one equator pixel in angle — or sparser
     where more than ``2 × ceil(window / 2)`` steps per side would be needed (within ~15°
     of the poles). The search runs on the 2×2 max-pooled image: offsets are in cells of
-    2 pixels.
+    2 pixels. Rows past a pole continue on the opposite meridian (:func:`_search_image`
+    builds them); the columns here are those of the sample's own row.
     """
     sx, sy = _sample_pixels(plan)
     q = _pool_factor(plan)
-    h, w = plan.h // q, plan.w // q
+    w = plan.w // q
     rr = -(-plan.window // q)  # window radius in cells (rows)
     kmax = 2 * rr if plan.sphere else rr  # column steps per side
     if plan.sphere:
@@ -292,16 +309,52 @@ def _window_indices(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         step = np.ones_like(sx)
         k = np.full_like(sx, rr)
     cols = np.arange(-kmax, kmax + 1)[None, :]
-    dx = np.clip(cols, -k[:, None], k[:, None]) * step[:, None]  # past k: repeat the edge
+    cx = (sx // q)[:, None] + np.clip(cols, -k[:, None], k[:, None]) * step[:, None]
+    cx = np.mod(cx, w) if plan.sphere else np.clip(cx, 0, w - 1)
+    return cx.astype(np.int32), sx, sy, rr
+
+
+def _window_indices(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Flat indices into the pooled image of every sample's whole window ``(N, k)``, in
+    the order the search's first maximum refers to (columns, then rows), and the samples'
+    pixels: the cells :func:`_search_columns` and :func:`_search_image` cover (tests)."""
+    cols, sx, sy, rr = _search_columns(plan)
+    q = _pool_factor(plan)
+    h, w = plan.h // q, plan.w // q
     rows = np.arange(-rr, rr + 1)
-    dx = np.repeat(dx, rows.size, axis=1)
-    dy = np.tile(rows, 2 * kmax + 1)[None, :]
-    cx, cy = (sx // q)[:, None] + dx, (sy // q)[:, None] + dy
+    cx = np.repeat(cols, rows.size, axis=1)
+    cy = (sy // q)[:, None] + np.tile(rows, cols.shape[1])[None, :]
     if plan.sphere:
         cx, cy = _wrap_np(cx, cy, w, h)
     else:
-        cx, cy = np.clip(cx, 0, w - 1), np.clip(cy, 0, h - 1)
+        cy = np.clip(cy, 0, h - 1)
     return (cy * w + cx).astype(np.int32), sx, sy
+
+
+def _search_image(pooled: Array, rr: int, sphere: bool) -> tuple[Array, Array]:
+    """Column-wise maximum over each window's ``2 rr + 1`` rows, and the first row offset
+    that holds it.
+
+    ``E`` is the pooled image extended by ``rr`` rows past each pole (on the sphere: the
+    rows next to the pole on the opposite meridian, as :func:`_wrap_np`; on a plane: the
+    edge rows); ``V[y, x] = max_i E[y + i, x]`` for ``i = 0 … 2 rr``, ``I`` the smallest
+    such ``i``. The window search then reads one value per window column instead of the
+    whole window (the window maximum and its first position in column-major order are
+    unchanged).
+    """
+    h, w = pooled.shape
+    if sphere:
+        flip = jnp.roll(pooled, -(w // 2), axis=1)  # flip[y, x] = pooled[y, (x + w/2) mod w]
+        E = jnp.concatenate([flip[:rr][::-1], pooled, flip[h - rr :][::-1]], axis=0)
+    else:
+        E = jnp.concatenate(
+            [jnp.repeat(pooled[:1], rr, 0), pooled, jnp.repeat(pooled[-1:], rr, 0)], axis=0
+        )
+    V, I = E[:h], jnp.zeros((h, w), jnp.int32)
+    for i in range(1, 2 * rr + 1):
+        up = E[i : i + h] > V
+        V, I = jnp.where(up, E[i : i + h], V), jnp.where(up, jnp.int32(i), I)
+    return V, I
 
 
 # ----------------------------------------------------------------------------- image ops
@@ -321,14 +374,23 @@ def _reduce(rgb: Array, f: int, weights: tuple[float, float, float] | None) -> t
     lum = jnp.where(ok, jnp.maximum(lum, 0), 0)
     if f == 1:
         return clean, lum
-    H, W = rgb.shape[0] // f, rgb.shape[1] // f
-    x = clean.reshape(H, f, W * f * 3)
+    return _block_mean(clean, f), _block_max(lum, f)
+
+
+def _block_mean(x: Array, f: int) -> Array:
+    """Mean of the ``f × f`` blocks of an ``(H, W, 3)`` image (:func:`_reduce`)."""
+    H, W = x.shape[0] // f, x.shape[1] // f
+    x = x.reshape(H, f, W * f * 3)
     x = sum(x[:, i] for i in range(f)).reshape(H, W, f, 3)
-    p = lum.reshape(H, f, W * f)
+    return sum(x[:, :, j] for j in range(f)) / (f * f)
+
+
+def _block_max(x: Array, f: int) -> Array:
+    """Maximum of the ``f × f`` blocks of an ``(H, W)`` image."""
+    H, W = x.shape[0] // f, x.shape[1] // f
+    p = x.reshape(H, f, W * f)
     p = functools.reduce(jnp.maximum, [p[:, i] for i in range(f)]).reshape(H, W, f)
-    return sum(x[:, :, j] for j in range(f)) / (f * f), functools.reduce(
-        jnp.maximum, [p[:, :, j] for j in range(f)]
-    )
+    return functools.reduce(jnp.maximum, [p[:, :, j] for j in range(f)])
 
 
 def _blur(L: Array, sigma: float, wrap: bool) -> Array:
@@ -357,11 +419,71 @@ def _blur(L: Array, sigma: float, wrap: bool) -> Array:
     return along_rows(along_rows(L, False).T, wrap).T
 
 
-def _dilate8(x: Array) -> Array:
-    """3×3 binary dilation over the last two axes (zero outside)."""
-    p = jnp.pad(x, [(0, 0)] * (x.ndim - 2) + [(1, 1), (1, 1)])
-    rows = p[..., :-2, :] | p[..., 1:-1, :] | p[..., 2:, :]
-    return rows[..., :-2] | rows[..., 1:-1] | rows[..., 2:]
+def _grow(filled: Array, above: Array, limit: int) -> tuple[Array, Array]:
+    """Grow ``filled`` over the 8-connected pixels of ``above`` (both ``(..., Y, X)``
+    bool), one ring per step, for at most ``limit`` steps; also each filled pixel's step
+    (its geodesic distance from the start, in pixels).
+
+    The masks are bit-packed, 32 rows to a ``uint32`` word, so a step is a few word
+    operations on ``(..., ceil(Y / 32), X)`` arrays (on booleans each step cost ~100 µs
+    on XLA:CPU and large lights take 25+ steps). The distance is a bit-sliced counter of
+    the steps each pixel spent unfilled: ``dist(p) = #{steps whose start had p unfilled}``.
+    """
+    ny = above.shape[-2]
+    nw = -(-ny // 32)
+    bits = max(1, int(limit).bit_length())
+    pad = [(0, 0)] * (above.ndim - 2) + [(0, nw * 32 - ny), (0, 0)]
+    lead = (1,) * (above.ndim - 2)
+
+    def pack(x: Array) -> Array:
+        # an unrolled OR of shifted rows (a sum over the bit axis ran ~5x slower)
+        x = jnp.pad(x, pad).astype(jnp.uint32)
+        words = [
+            functools.reduce(
+                jnp.bitwise_or, [x[..., 32 * w + i, :] << jnp.uint32(i) for i in range(32)]
+            )
+            for w in range(nw)
+        ]
+        return jnp.stack(words, axis=-2)
+
+    def dilate(m: Array) -> Array:
+        zero = jnp.zeros_like(m[..., :1, :])
+        up = (m << 1) | jnp.concatenate([zero, m[..., :-1, :] >> 31], axis=-2)
+        down = (m >> 1) | (jnp.concatenate([m[..., 1:, :], zero], axis=-2) << 31)
+        v = m | up | down
+        zcol = jnp.zeros_like(v[..., :1])
+        return (
+            v
+            | jnp.concatenate([zcol, v[..., :-1]], axis=-1)
+            | jnp.concatenate([v[..., 1:], zcol], axis=-1)
+        )
+
+    def step(state: tuple[Array, tuple[Array, ...], Array, Array]) -> Any:
+        fill, count, i, _ = state
+        carry, planes = ~fill, []
+        for c in count:
+            planes.append(c ^ carry)
+            carry = c & carry
+        new = above_p & dilate(fill) & ~fill
+        return fill | new, tuple(planes), i + 1, jnp.any(new != 0)
+
+    above_p = pack(above)
+    zeros = jnp.zeros_like(above_p)
+    fill, count, _, _ = jax.lax.while_loop(
+        lambda s: s[3] & (s[2] < limit),
+        step,
+        (pack(filled), (zeros,) * bits, jnp.int32(0), jnp.bool_(True)),
+    )
+    # unpack: row y is bit y % 32 of word y // 32
+    rows = np.arange(ny)
+    word = jnp.asarray(rows // 32)
+    bit = jnp.asarray(rows % 32, jnp.uint32).reshape(lead + (ny, 1))
+
+    def unpack(m: Array) -> Array:
+        return (m[..., word, :] >> bit) & 1
+
+    dist = sum(unpack(c).astype(jnp.int32) << b for b, c in enumerate(count))
+    return unpack(fill).astype(bool), dist
 
 
 # ----------------------------------------------------------------------------- clustering
@@ -388,12 +510,15 @@ def _leaders(adj: Array, valid: Array) -> Array:
 
 
 def _owner(adj: Array, lead: Array, valid: Array) -> Array:
-    """Index of the first leader that takes each item (itself for a leader; −1 if invalid)."""
+    """Index of the first leader that takes each item (itself for a leader; −1 if invalid).
+
+    The first index as a min-reduction (an argmax over booleans is a two-value reduction
+    that XLA:CPU runs several times slower)."""
     n = valid.shape[0]
-    idx = jnp.arange(n)
+    idx = jnp.arange(n, dtype=jnp.int32)
     takes = lead[:, None] & ((adj & (idx[:, None] < idx[None, :])) | jnp.eye(n, dtype=bool))
-    first = jnp.argmax(takes, axis=0)
-    return jnp.where(valid & jnp.any(takes, axis=0), first, -1)
+    first = jnp.min(jnp.where(takes, idx[:, None], n), axis=0)
+    return jnp.where(valid & (first < n), first, -1)
 
 
 def _compact(mask: Array, size: int) -> tuple[Array, Array, Array]:
@@ -411,15 +536,24 @@ def _compact(mask: Array, size: int) -> tuple[Array, Array, Array]:
 # ----------------------------------------------------------------------------- the pipeline
 
 
-def _threshold(L: Array, sample_vals: Array, thr: Array) -> Array:
-    """The user's threshold, or the automatic one (module docstring); ``inf`` = no light."""
-    med = jnp.median(sample_vals)
-    top = jnp.max(L)
+def _median(x: Array) -> Array:
+    """``jnp.median`` of a 1-D array without NaN, from ``lax.top_k`` (XLA:CPU's full sort
+    took ~5x longer): the mean of the order statistics ``⌊(n−1)/2⌋`` and ``⌈(n−1)/2⌉``."""
+    n = x.shape[0]
+    lo, hi = (n - 1) // 2, n // 2
+    top = jax.lax.top_k(x, n - lo)[0]  # largest first: top[n - 1 - i] is the i-th smallest
+    return (top[n - 1 - lo] + top[n - 1 - hi]) * 0.5
+
+
+def _threshold(top: Array, sample_vals: Array, thr: Array) -> Array:
+    """The user's threshold, or the automatic one (module docstring); ``inf`` = no light.
+    ``top`` is the largest input luminance ``M``."""
+    med = _median(sample_vals)
     auto = jnp.maximum(AUTO_MEDIAN_FACTOR * med, AUTO_PEAK_FACTOR * top)
     auto = jnp.minimum(auto, LDR_FACTOR * top)
     auto = jnp.where((top > 0) & (auto > 0) & (auto >= MIN_CONTRAST * med), auto, jnp.inf)
     user = jnp.where(thr > 0, thr, jnp.inf)
-    return jnp.where(jnp.isnan(thr), auto, user).astype(L.dtype)
+    return jnp.where(jnp.isnan(thr), auto, user).astype(top.dtype)
 
 
 def _working_rgb(
@@ -439,8 +573,22 @@ def _prepare(rgb: Array, plan: _Plan) -> tuple[Array, Array]:
     return _working_rgb(rgb, plan.factor, (plan.h, plan.w), plan.weights)
 
 
-def _smooth(rgb_w: Array, plan: _Plan) -> tuple[Array, Array, Array]:
-    """Step 2: luminance, its blur, and the blur max-pooled for the window search."""
+def _domega(plan: _Plan) -> np.ndarray:
+    """Solid angle of one pixel of each working row (sr; 1 on a plane: energy = ∑ L)."""
+    return _row_geometry(plan.h)[2] / plan.w if plan.sphere else np.ones(plan.h)
+
+
+def _smooth(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
+    """Step 2 and the per-pixel passes over the map that need no threshold, materialised
+    once (a call boundary: fused into their consumers they were recomputed per read):
+
+    - ``L``, ``Lb``: the luminance and its blur (samples, 2×2 blocks, line test);
+    - ``V``, ``I``: the column-wise window maximum of the 2×2 max-pooled ``Lb``
+      (:func:`_search_image`);
+    - ``strips``: each channel step 9 reads (``L``, RGB, the peak luminance, ``Lb`` when
+      blurred) at the ``2n`` columns around the seam (:func:`_windows`);
+    - ``total``: ∑ L dω of the map, ``top``: its largest input luminance.
+    """
     L = jnp.maximum(luminance(rgb_w, plan.weights), 0)
     Lb = _blur(L, plan.blur, plan.sphere)
     if _pool_factor(plan) == 2:
@@ -448,32 +596,87 @@ def _smooth(rgb_w: Array, plan: _Plan) -> tuple[Array, Array, Array]:
         pooled = jnp.maximum(rows[:, 0::2], rows[:, 1::2])
     else:
         pooled = Lb
-    return L, Lb, pooled
+    V, I = _search_image(pooled, _search_columns(plan)[3], plan.sphere)
+    n = 2 * plan.radius_x + 1
+    chans = dict(L=L, rgb=rgb_w, peak=L_peak) | (dict(Lb=Lb) if plan.blur > 0 else {})
+    strips = {
+        k: jnp.concatenate([v[:, v.shape[1] - n :], v[:, :n]], axis=1) for k, v in chans.items()
+    }
+    total = accurate_sum(L * jnp.asarray(_domega(plan), L.dtype)[:, None])
+    return dict(L=L, Lb=Lb, V=V, I=I, strips=strips, total=total, top=jnp.max(L_peak))
+
+
+def _row_slices(x: Array, y: Array, x0: Array, n: int) -> Array:
+    """``x[y, x0 : x0 + n]`` for every pair of ``y``, ``x0`` (same shape ``S``): ``S + (n,) +
+    x.shape[2:]`` (one slice gather: far cheaper on XLA:CPU than a gather per pixel)."""
+    tail = x.shape[2:]
+
+    def one(yy: Array, xx: Array) -> Array:
+        start = (yy, xx) + (jnp.zeros((), yy.dtype),) * len(tail)
+        return jax.lax.dynamic_slice(x, start, (1, n) + tail)[0]
+
+    out = jax.vmap(one)(y.reshape(-1), x0.reshape(-1))
+    return out.reshape(y.shape + (n,) + tail)
+
+
+def _windows(x: Array, strip: Array, y: Array, x0: Array, r: int) -> Array:
+    """Window rows ``x[y, x0 − r … x0 + r]``, columns wrapped: ``y.shape + (2r + 1,) +
+    x.shape[2:]``.
+
+    A row inside the image is one slice of ``x``; a row across the seam (or, on a plane,
+    past an edge, where the values are masked) one slice of ``strip``: the columns
+    ``W − n … W − 1, 0 … n − 1`` (``n = 2r + 1``; :func:`_smooth`). No padded copy of
+    the map is made (copying the map's channels cost more than all of step 9).
+    """
+    n, w = 2 * r + 1, x.shape[1]
+    s = x0 - r
+    cross = (s < 0) | (s > w - n)
+    inner = _row_slices(x, y, jnp.clip(s, 0, w - n), n)
+    seam = _row_slices(strip, y, jnp.clip(jnp.mod(s + n, w), 0, n), n)
+    # the barrier keeps both as slice gathers (fused into the select, XLA:CPU gathered
+    # pixel by pixel, several times slower)
+    inner, seam = jax.lax.optimization_barrier((inner, seam))
+    return jnp.where(cross.reshape(cross.shape + (1,) * (inner.ndim - cross.ndim)), seam, inner)
 
 
 def _find(
-    rgb_w: Array, L_peak: Array, L: Array, Lb: Array, pooled: Array, thr: Array, plan: _Plan
+    rgb_w: Array,
+    L_peak: Array,
+    smooth: dict[str, Any],
+    thr: Array,
+    plan: _Plan,
+    single: bool = False,
 ) -> dict[str, Array]:
-    """Steps 3–9 on the prepared images."""
-    dt = L.dtype
+    """Steps 3–9 on the prepared images (:func:`_prepare`, :func:`_smooth`); ``single``:
+    not under ``vmap`` (data-dependent branches then skip work)."""
+    Lb, V, I, strips = smooth["Lb"], smooth["V"], smooth["I"], smooth["strips"]
+    dt = Lb.dtype
     H, W = plan.h, plan.w
     K, R, C = plan.max_lights, plan.max_reps, plan.max_candidates
-    Lf, Lbf = L.reshape(-1), Lb.reshape(-1)
+    Lbf = Lb.reshape(-1)
 
-    # 3-5: samples and their neighbourhood maximum (on the pooled image, then the best
-    # 2×2 block's pixels), threshold
-    widx, sx, sy = _window_indices(plan)
+    # 3-5: samples and their neighbourhood maximum (on the pooled image: one value per
+    # window column from V, the row from I; then the best 2×2 block's pixels), threshold
+    cols, sx, sy, rr = _search_columns(plan)
     q = _pool_factor(plan)
-    win = pooled.reshape(-1)[jnp.asarray(widx)]
-    best = jnp.take_along_axis(jnp.asarray(widx), jnp.argmax(win, axis=1)[:, None], 1)[:, 0]
-    by, bx = best // (W // q), best % (W // q)
+    hq, wq = H // q, W // q
+    row0 = jnp.asarray((sy // q) * wq, jnp.int32)
+    vals = V.reshape(-1)[row0[:, None] + jnp.asarray(cols)]
+    bc = jnp.take_along_axis(jnp.asarray(cols), jnp.argmax(vals, axis=1)[:, None], 1)[:, 0]
+    by = jnp.asarray(sy // q, jnp.int32) + I.reshape(-1)[row0 + bc] - rr
+    if plan.sphere:
+        top_, bottom = by < 0, by >= hq
+        bx = jnp.where(top_ | bottom, jnp.mod(bc + wq // 2, wq), bc)
+        by = jnp.where(top_, -by - 1, jnp.where(bottom, 2 * hq - 1 - by, by))
+    else:
+        bx, by = bc, jnp.clip(by, 0, hq - 1)
     cand_y = (q * by)[:, None] + jnp.asarray([0, 0, 1, 1] if q == 2 else [0])[None, :]
     cand_x = (q * bx)[:, None] + jnp.asarray([0, 1, 0, 1] if q == 2 else [0])[None, :]
     vals = Lbf[cand_y * W + cand_x]
     pick4 = jnp.argmax(vals, axis=1)[:, None]
     m = jnp.take_along_axis(vals, pick4, 1)[:, 0]
     local = jnp.take_along_axis(cand_y * W + cand_x, pick4, 1)[:, 0]
-    T = _threshold(L_peak, Lbf[jnp.asarray(sy * W + sx)], thr)
+    T = _threshold(smooth["top"], Lbf[jnp.asarray(sy * W + sx)], thr)
     safe_T = jnp.where(jnp.isfinite(T), T, 1.0)
 
     # 6: sort candidates
@@ -484,9 +687,8 @@ def _find(
     cy, cx = cflat // W, cflat % W
 
     if plan.sphere:
-        ce, se, band = (jnp.asarray(a, dt) for a in _row_geometry(H))
+        ce, se, _ = (jnp.asarray(a, dt) for a in _row_geometry(H))
         ca, sa = (jnp.asarray(a, dt) for a in _col_geometry(W))
-        domega = band / W
 
         def unit(x: Array, y: Array) -> Array:
             return jnp.stack([ce[y] * sa[x], se[y], -ce[y] * ca[x]], axis=-1)
@@ -494,9 +696,9 @@ def _find(
         cdir = unit(cx, cy)
         close = (cdir @ cdir.T) > plan.nms_cos
     else:
-        domega = jnp.ones(H, dt)
         cpos = jnp.stack([cx, cy], -1).astype(dt)
         close = jnp.sum((cpos[:, None] - cpos[None]) ** 2, -1) < plan.nms_cos
+    domega = jnp.asarray(_domega(plan), dt)
 
     # 7: Euclidean filter
     lead = _leaders(close, cvalid)
@@ -505,30 +707,54 @@ def _find(
     rx, ry = cx[rep_c], cy[rep_c]
     rvalid = rvalid & cvalid[rep_c]
 
-    # 8: Bresenham merge (fixed-length lines, seam-wrapped)
-    S = plan.line_points
-    t = (jnp.arange(1, S + 1, dtype=dt) / S)[None, None, :]
-    ddx = (rx[None, :] - rx[:, None]).astype(dt)
-    if plan.sphere:
-        ddx = jnp.mod(ddx + W // 2, W) - W // 2
-    ddy = (ry[None, :] - ry[:, None]).astype(dt)
-    lx = jnp.round(rx[:, None, None] + t * ddx[..., None]).astype(jnp.int32)
-    ly = jnp.round(ry[:, None, None] + t * ddy[..., None]).astype(jnp.int32)
-    lx = jnp.mod(lx, W) if plan.sphere else jnp.clip(lx, 0, W - 1)
-    ly = jnp.clip(ly, 0, H - 1)
-    c = jnp.minimum(Lbf[ly * W + lx] / safe_T, LINE_CLAMP) - (1.0 - LINE_TOLERANCE)
-    # running mean >= 1 - tol at every step  <=>  every prefix sum of c >= 0 (unrolled:
-    # a cumsum here became an O(S²) reduce-window on XLA:CPU)
-    acc = c[..., 0]
-    passes = acc >= 0
-    for k in range(1, S):
-        acc = acc + c[..., k]
-        passes = passes & (acc >= 0)
+    # 8: Bresenham merge (fixed-length lines, seam-wrapped), for the pairs i < j only:
+    # the greedy merge reads no other
+    def line_test(n: int) -> Array:
+        """The line test between the first ``n`` kept candidates, as an ``(R, R)`` mask."""
+        S = plan.line_points
+        pi, pj = (jnp.asarray(a, jnp.int32) for a in np.triu_indices(n, 1))
+        t = (jnp.arange(1, S + 1, dtype=dt) / S)[None, :]
+        ddx = (rx[pj] - rx[pi]).astype(dt)
+        if plan.sphere:
+            ddx = jnp.mod(ddx + W // 2, W) - W // 2
+        ddy = (ry[pj] - ry[pi]).astype(dt)
+        lx = jnp.round(rx[pi][:, None] + t * ddx[:, None]).astype(jnp.int32)
+        ly = jnp.round(ry[pi][:, None] + t * ddy[:, None]).astype(jnp.int32)
+        # |ddx| <= W/2: one wrap either way (cheaper than an integer mod)
+        if plan.sphere:
+            lx = jnp.where(lx < 0, lx + W, jnp.where(lx >= W, lx - W, lx))
+        else:
+            lx = jnp.clip(lx, 0, W - 1)
+        ly = jnp.clip(ly, 0, H - 1)
+        c = jnp.minimum(Lbf[ly * W + lx] / safe_T, LINE_CLAMP) - (1.0 - LINE_TOLERANCE)
+        # running mean >= 1 - tol at every step  <=>  every prefix sum of c >= 0
+        # (unrolled: a cumsum here became an O(S²) reduce-window on XLA:CPU)
+        acc = c[:, 0]
+        ok = acc >= 0
+        for k in range(1, S):
+            acc = acc + c[:, k]
+            ok = ok & (acc >= 0)
+        pair = np.full((R, R), pi.shape[0], np.int32)  # (i, j) -> its pair, else a False
+        pair[np.triu_indices(n, 1)] = np.arange(pi.shape[0])
+        return jnp.concatenate([ok, jnp.zeros(1, bool)])[jnp.asarray(pair)]
+
+    # Usually few candidates are kept (one per light): a single map then tests only the
+    # pairs among the first SMALL_REPS (the others are invalid and masked below). Under
+    # vmap a cond would run both branches, so a batch always tests all pairs.
+    n_small = min(R, SMALL_REPS)
+    if single and n_small < R:
+        passes = jax.lax.cond(
+            jnp.sum(rvalid) <= n_small, lambda: line_test(n_small), lambda: line_test(R)
+        )
+    else:
+        passes = line_test(R)
     if plan.sphere:
         rdir = cdir[rep_c]
         near = (rdir @ rdir.T) >= plan.merge_cos
     else:
-        near = (ddx**2 + ddy**2) <= plan.merge_cos
+        dx2 = (rx[None, :] - rx[:, None]).astype(dt)
+        dy2 = (ry[None, :] - ry[:, None]).astype(dt)
+        near = (dx2**2 + dy2**2) <= plan.merge_cos
     merge = passes & near & rvalid[:, None] & rvalid[None, :]
     llead = _leaders(merge, rvalid)
     light_rep, lvalid, _ = _compact(llead, K)
@@ -542,148 +768,195 @@ def _find(
     # 9: grow each light over the connected pixels above T, in a window around the mean
     # of the local maxima its samples found (a flat-topped light's seed may sit on its
     # rim). On the sphere the window is twice as wide as high: it then spans max_radius
-    # in angle up to 60° of elevation.
-    ry_, rx_ = plan.radius, plan.radius_x
-    PY, PX = 2 * ry_ + 1, 2 * rx_ + 1
-    sxk, syk = rx[light_rep], ry[light_rep]
-    crep = jnp.where(cowner >= 0, crank[jnp.maximum(cowner, 0)], -1)
-    clight = jnp.where((crep >= 0) & (crep < R), rep_light[jnp.clip(crep, 0, R - 1)], -1)
+    # in angle up to 60° of elevation. Each window row is one slice of a channel (rows
+    # past a pole: the opposite meridian's row, its centre shifted by W/2).
+    def lights(K: int) -> dict[str, Array]:
+        """Step 9 and the outputs for the first ``K`` lights (the rest are invalid)."""
+        light_rep, lvalid = light_rep_all[:K], lvalid_all[:K]
+        ry_, rx_ = plan.radius, plan.radius_x
+        PY, PX = 2 * ry_ + 1, 2 * rx_ + 1
+        sxk, syk = rx[light_rep], ry[light_rep]
+        crep = jnp.where(cowner >= 0, crank[jnp.maximum(cowner, 0)], -1)
+        clight = jnp.where((crep >= 0) & (crep < R), rep_light[jnp.clip(crep, 0, R - 1)], -1)
 
-    def rel(x: Array, y: Array, owner: Array, cx: Array, cy: Array) -> tuple[Array, Array]:
-        dx = x - cx[jnp.maximum(owner, 0)]
+        def rel(x: Array, y: Array, owner: Array, cx: Array, cy: Array) -> tuple[Array, Array]:
+            dx = x - cx[jnp.maximum(owner, 0)]
+            if plan.sphere:
+                dx = jnp.mod(dx + W // 2, W) - W // 2
+            return dx, y - cy[jnp.maximum(owner, 0)]
+
+        member = (clight[:, None] == jnp.arange(K)[None, :]) & cvalid[:, None]
+        mdx, mdy = rel(cx, cy, clight, sxk, syk)
+        n_mem = jnp.maximum(jnp.sum(member, axis=0), 1)
+        ox = jnp.round(jnp.sum(member * mdx[:, None], axis=0) / n_mem).astype(sxk.dtype)
+        oy = jnp.round(jnp.sum(member * mdy[:, None], axis=0) / n_mem).astype(syk.dtype)
+        wx = jnp.mod(sxk + ox, W) if plan.sphere else jnp.clip(sxk + ox, 0, W - 1)
+        wy = jnp.clip(syk + oy, 0, H - 1)
+        offx = jnp.arange(-rx_, rx_ + 1, dtype=jnp.int32)
+        Yw = wy[:, None] + jnp.arange(-ry_, ry_ + 1, dtype=jnp.int32)[None, :]  # (K, PY)
         if plan.sphere:
-            dx = jnp.mod(dx + W // 2, W) - W // 2
-        return dx, y - cy[jnp.maximum(owner, 0)]
+            top_, bottom = Yw < 0, Yw >= H
+            Y = jnp.where(top_, -Yw - 1, jnp.where(bottom, 2 * H - 1 - Yw, Yw))
+            x0 = jnp.mod(wx[:, None] + jnp.where(top_ | bottom, W // 2, 0), W)
+            inside = jnp.broadcast_to(lvalid[:, None, None], (K, PY, PX))
+        else:
+            Y = jnp.clip(Yw, 0, H - 1)
+            x0 = jnp.broadcast_to(wx[:, None], (K, PY))
+            X = wx[:, None] + offx[None, :]
+            inside = ((Yw >= 0) & (Yw < H))[:, :, None] & ((X >= 0) & (X < W))[:, None, :]
+            inside = inside & lvalid[:, None, None]
 
-    member = (clight[:, None] == jnp.arange(K)[None, :]) & cvalid[:, None]
-    mdx, mdy = rel(cx, cy, clight, sxk, syk)
-    n_mem = jnp.maximum(jnp.sum(member, axis=0), 1)
-    ox = jnp.round(jnp.sum(member * mdx[:, None], axis=0) / n_mem).astype(sxk.dtype)
-    oy = jnp.round(jnp.sum(member * mdy[:, None], axis=0) / n_mem).astype(syk.dtype)
-    wx = jnp.mod(sxk + ox, W) if plan.sphere else jnp.clip(sxk + ox, 0, W - 1)
-    wy = jnp.clip(syk + oy, 0, H - 1)
-    X = jnp.broadcast_to(wx[:, None, None] + jnp.arange(-rx_, rx_ + 1)[None, None, :], (K, PY, PX))
-    Y = jnp.broadcast_to(wy[:, None, None] + jnp.arange(-ry_, ry_ + 1)[None, :, None], (K, PY, PX))
-    if plan.sphere:
-        top, bottom = Y < 0, Y >= H
-        Y = jnp.where(top, -Y - 1, jnp.where(bottom, 2 * H - 1 - Y, Y))
-        X = jnp.mod(jnp.where(top | bottom, X + W // 2, X), W)
-        inside = jnp.ones((K, PY, PX), bool)
-    else:
-        inside = (X >= 0) & (X < W) & (Y >= 0) & (Y < H)
-        X, Y = jnp.clip(X, 0, W - 1), jnp.clip(Y, 0, H - 1)
-    inside = inside & lvalid[:, None, None]
-    flat = Y * W + X
-    above = inside & (Lbf[flat] > T)
-    # seeds: every merged local maximum, placed in its light's window
-    rdx, rdy = rel(rx, ry, rep_light, wx, wy)
-    ok = (rep_light >= 0) & rvalid & (jnp.abs(rdx) <= rx_) & (jnp.abs(rdy) <= ry_)
-    seeds = (
-        jnp.zeros((K, PY, PX), bool)
-        .at[jnp.where(ok, rep_light, K), rdy + ry_, rdx + rx_]
-        .set(True, mode="drop")
-    )
-    filled = seeds & above
-    big = PY * PX + 1
-    dist = jnp.where(filled, 0, big).astype(jnp.int32)
+        def window(name: str, src: Array) -> Array:
+            return _windows(src, strips[name], Y, x0, rx_)
 
-    def grow(state: tuple[Array, Array, Array, Array]) -> tuple[Array, Array, Array, Array]:
-        fill, d, step, _ = state
-        new = above & _dilate8(fill) & ~fill
-        return fill | new, jnp.where(new, step + 1, d), step + 1, jnp.any(new)
-
-    filled, dist, _, _ = jax.lax.while_loop(
-        lambda s: s[3] & (s[2] < big), grow, (filled, dist, jnp.int32(0), jnp.bool_(True))
-    )
-    # a pixel two lights reach goes to the nearer (geodesic steps), then the brighter
-    kk = jnp.arange(K, dtype=jnp.int32)[:, None, None]
-    key = jnp.where(filled, dist * K + kk, big * K).astype(jnp.int32)
-    lab = jnp.full(H * W, big * K, jnp.int32).at[flat.reshape(-1)].min(key.reshape(-1))
-    own = filled & (lab[flat] == key)
-    lab = jnp.where(lab < big * K, lab % K, -1)
-
-    # light properties from its pixels
-    dw = domega[Y] * own
-    Lw = Lf[flat]
-    wgt = Lw * dw
-    energy = jnp.sum(wgt, axis=(1, 2))
-    omega = jnp.sum(dw, axis=(1, 2))
-    # per-channel gathers from channel planes, and the unit vectors' separable form below:
-    # building (K, h, w, 3) arrays here cost more than the rest of step 9
-    planes = jnp.moveaxis(rgb_w, -1, 0).reshape(3, -1)
-    rgb_sum = jnp.stack([jnp.sum(dw * planes[c][flat], axis=(1, 2)) for c in range(3)], -1)
-    safe_omega = jnp.where(omega > 0, omega, 1.0)
-    colour = rgb_sum / safe_omega[:, None]
-    mean_lum = energy / safe_omega
-    n_pix = jnp.sum(own, axis=(1, 2))
-    lvalid = lvalid & (n_pix > 0) & (energy > 0)
-    peak = jnp.max(jnp.where(own, L_peak.reshape(-1)[flat], 0), axis=(1, 2))
-    total = accurate_sum(L * domega[:, None])
-    share = energy / jnp.where(total > 0, total, 1.0)
-    scale_x, scale_y = plan.in_w / W, plan.in_h / H
-    if plan.sphere:
-        wc = wgt * ce[Y]
-        vec = jnp.stack(
-            [
-                jnp.sum(wc * sa[X], (1, 2)),
-                jnp.sum(wgt * se[Y], (1, 2)),
-                -jnp.sum(wc * ca[X], (1, 2)),
-            ],
-            axis=-1,
+        Lw = window("L", smooth["L"])
+        above = inside & ((window("Lb", Lb) if plan.blur > 0 else Lw) > T)
+        # seeds: every merged local maximum, placed in its light's window
+        rdx, rdy = rel(rx, ry, rep_light, wx, wy)
+        ok = (rep_light >= 0) & rvalid & (jnp.abs(rdx) <= rx_) & (jnp.abs(rdy) <= ry_)
+        seeds = (
+            jnp.zeros((K, PY, PX), bool)
+            .at[jnp.where(ok, rep_light, K), rdy + ry_, rdx + rx_]
+            .set(True, mode="drop")
         )
-        norm = jnp.linalg.norm(vec, axis=-1, keepdims=True)
-        direction = jnp.where(norm > 0, vec / jnp.where(norm > 0, norm, 1.0), unit(sxk, syk))
+        big = PY * PX + 1
+        filled, dist = _grow(seeds & above, above, big)
+        # a pixel two lights reach goes to the nearer (geodesic steps), then the brighter: the
+        # smallest key, by a scatter-min of the window rows into an image padded by rx_
+        # columns each side (padded column j is column j − rx_); on the sphere the padding
+        # columns are then folded into the columns they stand for, and copied back
+        # key = (dist, k) packed in bits: k is its low bits (a mask, not a division)
+        kbits = max(1, (K - 1).bit_length())
+        kk = jnp.arange(K, dtype=jnp.int32)[:, None, None]
+        none = big << kbits
+        key = jnp.where(filled, (dist << kbits) | kk, none).astype(jnp.int32)
+        lab = jax.lax.scatter_min(
+            jnp.full((H, W + 2 * rx_), none, jnp.int32),
+            jnp.stack([Y.reshape(-1), x0.reshape(-1)], axis=-1),
+            key.reshape(K * PY, PX),
+            jax.lax.ScatterDimensionNumbers(
+                update_window_dims=(1,),
+                inserted_window_dims=(0,),
+                scatter_dims_to_operand_dims=(0, 1),
+            ),
+            mode=jax.lax.GatherScatterMode.PROMISE_IN_BOUNDS,
+        )
+        r = rx_
+        if plan.sphere:
+            left = jnp.minimum(lab[:, r : 2 * r], lab[:, W + r :])
+            right = jnp.minimum(lab[:, W : W + r], lab[:, :r])
+            lab = jnp.concatenate([left, lab[:, 2 * r : W], right], axis=1)
+            padded = jnp.concatenate([lab[:, W - r :], lab, lab[:, :r]], axis=1)
+        else:
+            padded, lab = lab, lab[:, r : r + W]
+        own = filled & (_row_slices(padded, Y, x0, PX) == key)
+        lab = jnp.where(lab < none, lab & ((1 << kbits) - 1), -1)
+
+        # light properties from its pixels
+        dw = domega[Y][..., None] * own
+        wgt = Lw * dw
+        energy = jnp.sum(wgt, axis=(1, 2))
+        omega = jnp.sum(dw, axis=(1, 2))
+        rgb_w_ = window("rgb", rgb_w)
+        # per channel: one reduction over a (..., 3) axis ran several times slower
+        rgb_sum = jnp.stack([jnp.sum(dw * rgb_w_[..., c], axis=(1, 2)) for c in range(3)], -1)
+        safe_omega = jnp.where(omega > 0, omega, 1.0)
+        colour = rgb_sum / safe_omega[:, None]
+        mean_lum = energy / safe_omega
+        n_pix = jnp.sum(own, axis=(1, 2))
+        lvalid = lvalid & (n_pix > 0) & (energy > 0)
+        peak = jnp.max(jnp.where(own, window("peak", L_peak), 0), axis=(1, 2))
+        total = smooth["total"]
+        share = energy / jnp.where(total > 0, total, 1.0)
+        scale_x, scale_y = plan.in_w / W, plan.in_h / H
+        if plan.sphere:
+            # sin/cos of each window pixel's azimuth: slices of the column-padded tables
+            r = rx_
+            ca_w, sa_w = (
+                _row_slices(
+                    jnp.asarray(np.concatenate([a[W - r :], a, a[:r]]), dt)[None], 0 * Y, x0, PX
+                )
+                for a in _col_geometry(W)
+            )
+            wc = wgt * ce[Y][..., None]
+            vec = jnp.stack(
+                [
+                    jnp.sum(wc * sa_w, (1, 2)),
+                    jnp.sum(wgt * se[Y][..., None], (1, 2)),
+                    -jnp.sum(wc * ca_w, (1, 2)),
+                ],
+                axis=-1,
+            )
+            norm = jnp.linalg.norm(vec, axis=-1, keepdims=True)
+            direction = jnp.where(norm > 0, vec / jnp.where(norm > 0, norm, 1.0), unit(sxk, syk))
+        else:
+            direction = jnp.zeros((K, 3), dt)
+            omega = jnp.zeros(K, dt)
+        # energy-weighted mean pixel position, columns unwrapped around the window centre (no
+        # trigonometry here: XLA:CPU compiles each transcendental into a large kernel; the
+        # azimuth, elevation and angular size are computed from these on demand)
+        safe_e = jnp.where(energy > 0, energy, 1.0)
+        cxw = wx.astype(dt) + jnp.sum(wgt * offx.astype(dt)[None, None, :], axis=(1, 2)) / safe_e
+        cxw = jnp.mod(cxw + 0.5, W) - 0.5 if plan.sphere else cxw
+        cyw = jnp.sum(wgt * Y[..., None], axis=(1, 2)) / safe_e
+        pixel = jnp.stack([(cxw + 0.5) * scale_x - 0.5, (cyw + 0.5) * scale_y - 0.5], axis=-1)
+        peak_pixel = jnp.stack([(sxk + 0.5) * scale_x - 0.5, (syk + 0.5) * scale_y - 0.5], -1)
+
+        # samples: which light holds each candidate's local maximum
+        clab = jnp.where(cvalid, lab.reshape(-1)[cflat], -1)
+        n_samples = jnp.sum(clab[None, :] == jnp.arange(K)[:, None], axis=1)
+
+        # largest energy first; relabel
+        order = jnp.argsort(-jnp.where(lvalid, energy, -1.0), stable=True)
+        inv = jnp.zeros(K, jnp.int32).at[order].set(jnp.arange(K, dtype=jnp.int32))
+        lvalid = lvalid[order]
+        count = jnp.sum(lvalid)
+
+        def relabel(a: Array) -> Array:
+            b = jnp.where(a >= 0, inv[jnp.maximum(a, 0)], -1)
+            return jnp.where(b < count, b, -1).astype(jnp.int32)
+
+        # one packed table, one gather: each separate output array is a kernel XLA compiles
+        fields = {
+            "direction": direction,
+            "pixel": pixel,
+            "peak_pixel": peak_pixel,
+            "peak_luminance": peak,
+            "mean_luminance": mean_lum,
+            "colour": colour,
+            "irradiance": rgb_sum,
+            "solid_angle": omega,
+            "area": n_pix * (scale_x * scale_y),
+            "energy": energy,
+            "energy_share": share,
+            "n_samples": n_samples,
+        }
+        cols = [jnp.reshape(v, (K, -1)).astype(dt) for v in fields.values()]
+        table = jnp.where(lvalid[:, None], jnp.concatenate(cols, axis=1)[order], 0)
+        out: dict[str, Array] = {}
+        start = 0
+        for (name, v), c in zip(fields.items(), cols, strict=True):
+            out[name] = table[:, start : start + c.shape[1]].reshape(v.shape)
+            start += c.shape[1]
+        out["n_samples"] = out["n_samples"].astype(jnp.int32)
+        pad = K_all - K  # rows of the lights this call did not look at: invalid, zero
+        out = {k: jnp.pad(v, [(0, pad)] + [(0, 0)] * (v.ndim - 1)) for k, v in out.items()}
+        return dict(
+            count=count.astype(jnp.int32),
+            valid=jnp.pad(lvalid, (0, pad)),
+            **out,
+            labels=relabel(lab).reshape(H, W),
+            sample_light=relabel(clab),
+        )
+
+    # Most maps have a few lights: a single map then runs step 9 on the first SMALL_LIGHTS
+    # only (exact: the others are invalid). Under vmap both branches would run.
+    K_all, light_rep_all, lvalid_all = K, light_rep, lvalid
+    if single and SMALL_LIGHTS < K:
+        res = jax.lax.cond(n_found <= SMALL_LIGHTS, lambda: lights(SMALL_LIGHTS), lambda: lights(K))
     else:
-        direction = jnp.zeros((K, 3), dt)
-        omega = jnp.zeros(K, dt)
-    # energy-weighted mean pixel position, columns unwrapped around the window centre (no
-    # trigonometry here: XLA:CPU compiles each transcendental into a large kernel; the
-    # azimuth, elevation and angular size are computed from these on demand)
-    safe_e = jnp.where(energy > 0, energy, 1.0)
-    offx = jnp.arange(-rx_, rx_ + 1, dtype=dt)[None, None, :]
-    cxw = wx.astype(dt) + jnp.sum(wgt * offx, axis=(1, 2)) / safe_e
-    cxw = jnp.mod(cxw + 0.5, W) - 0.5 if plan.sphere else cxw
-    cyw = jnp.sum(wgt * Y, axis=(1, 2)) / safe_e
-    pixel = jnp.stack([(cxw + 0.5) * scale_x - 0.5, (cyw + 0.5) * scale_y - 0.5], axis=-1)
-    peak_pixel = jnp.stack([(sxk + 0.5) * scale_x - 0.5, (syk + 0.5) * scale_y - 0.5], -1)
-
-    # samples: which light holds each candidate's local maximum
-    clab = jnp.where(cvalid, lab[cflat], -1)
-    n_samples = jnp.sum(clab[None, :] == jnp.arange(K)[:, None], axis=1)
-
-    # largest energy first; relabel
-    order = jnp.argsort(-jnp.where(lvalid, energy, -1.0), stable=True)
-    inv = jnp.zeros(K, jnp.int32).at[order].set(jnp.arange(K, dtype=jnp.int32))
-    lvalid = lvalid[order]
-    count = jnp.sum(lvalid)
-
-    def relabel(a: Array) -> Array:
-        b = jnp.where(a >= 0, inv[jnp.maximum(a, 0)], -1)
-        return jnp.where(b < count, b, -1).astype(jnp.int32)
-
-    # one packed table, one gather: each separate output array is a kernel XLA compiles
-    fields = {
-        "direction": direction,
-        "pixel": pixel,
-        "peak_pixel": peak_pixel,
-        "peak_luminance": peak,
-        "mean_luminance": mean_lum,
-        "colour": colour,
-        "irradiance": rgb_sum,
-        "solid_angle": omega,
-        "area": n_pix * (scale_x * scale_y),
-        "energy": energy,
-        "energy_share": share,
-        "n_samples": n_samples,
-    }
-    cols = [jnp.reshape(v, (K, -1)).astype(dt) for v in fields.values()]
-    table = jnp.where(lvalid[:, None], jnp.concatenate(cols, axis=1)[order], 0)
-    out: dict[str, Array] = {}
-    start = 0
-    for (name, v), c in zip(fields.items(), cols, strict=True):
-        out[name] = table[:, start : start + c.shape[1]].reshape(v.shape)
-        start += c.shape[1]
-    out["n_samples"] = out["n_samples"].astype(jnp.int32)
+        res = lights(K)
+    scale_x, scale_y = plan.in_w / W, plan.in_h / H
     samples = jnp.stack(
         [
             (jnp.asarray(sx)[cidx] + 0.5) * scale_x - 0.5,
@@ -693,14 +966,10 @@ def _find(
     )
     truncated = (jnp.sum(is_cand) > C) | (jnp.sum(lead) > R) | (n_found > K)
     return dict(
-        count=count.astype(jnp.int32),
         n_found=n_found.astype(jnp.int32),
         truncated=truncated,
-        valid=lvalid,
-        **out,
-        labels=relabel(lab).reshape(H, W),
+        **res,
         samples=jnp.where(cvalid[:, None], samples, 0).astype(dt),
-        sample_light=relabel(clab),
         threshold=T,
     )
 
@@ -719,6 +988,7 @@ def _flat_float(x: Array, batch: tuple[int, ...]) -> Array:
 
 def _image_shape(image: ArrayLike, name: str) -> tuple[tuple[int, ...], int, int]:
     """``(batch, H, W)`` of a ``(..., H, W, 3)`` image; ValueError otherwise."""
+    _check.real(image, name)
     shape = np.shape(image)
     if len(shape) < 3 or shape[-1] != 3:
         raise ValueError(f"{name}: expected channels-last RGB (..., H, W, 3), got shape {shape}")
@@ -734,21 +1004,24 @@ def _prepare_batch(rgb: Array, plan: _Plan, batch: tuple[int, ...]) -> tuple[Arr
 
 
 @functools.partial(jax.jit, static_argnames=("plan",))
-def _smooth_batch(rgb_w: Array, plan: _Plan) -> tuple[Array, Array, Array]:
-    return jax.vmap(lambda x: _smooth(x, plan))(rgb_w)
+def _smooth_batch(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
+    return jax.vmap(lambda x, p: _smooth(x, p, plan))(rgb_w, L_peak)
 
 
 @functools.partial(jax.jit, static_argnames=("plan", "batch"))
 def _find_batch(
     prepared: tuple[Array, Array],
-    smooth: tuple[Array, Array, Array],
+    smooth: dict[str, Any],
     thr: Array,
     plan: _Plan,
     batch: tuple[int, ...],
 ) -> Lights:
-    dt = prepared[0].dtype
-    thr = _flat(jnp.asarray(thr, dt), batch)
-    out = jax.vmap(lambda p, s, t: _find(*p, *s, t, plan))(prepared, smooth, thr)
+    thr = _flat(jnp.asarray(thr, prepared[0].dtype), batch)
+    if math.prod(batch) == 1:  # no vmap: lets _find branch on the data
+        first = jax.tree.map(lambda v: v[0], (prepared, smooth, thr))
+        out = jax.tree.map(lambda v: v[None], _find(*first[0], first[1], first[2], plan, True))
+    else:
+        out = jax.vmap(lambda p, s, t: _find(*p, s, t, plan))(prepared, smooth, thr)
     out = {k: v.reshape(batch + v.shape[1:]) for k, v in out.items()}
     return Lights(
         **out,
@@ -790,7 +1063,7 @@ def _run(
     # reads it, recomputing them per read (3x slower in total); a call boundary
     # materialises each image once.
     prepared = _prepare_batch(image, plan, batch)
-    return _find_batch(prepared, _smooth_batch(prepared[0], plan), thr, plan, batch)
+    return _find_batch(prepared, _smooth_batch(*prepared, plan), thr, plan, batch)
 
 
 def detect(

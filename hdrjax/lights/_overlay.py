@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
+from .. import _check
 from ._result import Lights
 
 
@@ -18,6 +19,7 @@ def display_image(rgb: Float[ArrayLike, "H W 3"], method: str = "reinhard2002") 
 
     Non-finite pixels are shown black.
     """
+    _check.real(rgb, "rgb")
     from .. import display, tonemap
 
     x = np.asarray(rgb, np.float32)

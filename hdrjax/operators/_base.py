@@ -25,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, measure
 
@@ -48,6 +49,7 @@ def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
 
 def as_float_image(rgb: ArrayLike) -> Array:
     """Validate ``(..., H, W, 3)`` and promote to float32/float64 (float16/ints → float32)."""
+    _check.real(rgb, "rgb")
     rgb = jnp.asarray(rgb)
     if rgb.ndim < 3 or rgb.shape[-1] != 3:
         raise ValueError(f"rgb: expected an image of shape (..., H, W, 3), got {rgb.shape}")
@@ -164,10 +166,16 @@ class AbstractOperator(eqx.Module):
             raise ValueError(f"measure: expected one image (H, W, 3), got shape {rgb.shape}")
         if not self.unset():
             return self
+        if not _traced(self, rgb):
+            return _measure_jit(self, rgb)
         return dispatch(rgb, self.weights_, self._measure, fix=False)
 
     def __call__(self, rgb: Float[ArrayLike, "*batch H W 3"]) -> Float[Array, "*batch H W 3"]:
         rgb = as_float_image(rgb)
+        if not _traced(self, rgb):
+            # called eagerly (a notebook, a script): run the compiled function, cached per
+            # operator structure and image shape (eager lax.cond would recompile every call)
+            return _apply_jit(self, rgb)
         if rgb.ndim > 3:
             return jax.vmap(self.__call__)(rgb)
         return dispatch(rgb, self.weights_, lambda p: self._measure(p)._apply(p), fix=True)
@@ -263,6 +271,16 @@ def make_operator(method: str, **params: Any) -> AbstractOperator:
 @eqx.filter_jit
 def _apply_jit(op: AbstractOperator, rgb: Array) -> Array:
     return op(rgb)
+
+
+@eqx.filter_jit
+def _measure_jit(op: AbstractOperator, rgb: Array) -> AbstractOperator:
+    return op.measure(rgb)
+
+
+def _traced(*trees: Any) -> bool:
+    """Whether any array in ``trees`` is a tracer (we are inside jit/vmap/grad)."""
+    return any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(trees))
 
 
 def tonemap(

@@ -15,9 +15,22 @@ Automatic parameters (JGT; formulas.md §1.3), on the finite positive luminance:
     with ``L_1``/``L_99`` the 1st/99th percentiles and ``L̄`` the log-average of the pixels
     at or below ``L_99`` (0.18 when ``L_99 = L_1``);
     white (Eq. 5): ``L_white = 1.5 · 2^(log2 L_max − log2 L_min − 5)`` on the full range,
-    except when ``log2(L_max / L_min) ≤ log2 L̄ + 4.415037`` (Eq. 5's white would fall below
-    the log-average), where ``L_white = 1.5 · max(L)`` in scaled units (hdritools' guard).
+    except when ``log2(L_max / L_min) ≤ log2(s · L̄) + 4.415037``, with ``s = a / L̄_w``
+    the world-to-scaled factor (Eq. 5's white would fall at or below the trimmed
+    log-average in scaled units), where ``L_white = 1.5 · s · max(L)`` (hdritools' guard).
     ``L_white`` is in scaled units, like the paper's.
+
+Departure from hdritools (edgarv/hdritools ``ImageIO/Reinhard02.cpp``, ``EstimateParams``):
+its guard is ``log2(L_max/L_min) > log2(l_w) + 4.415037`` — in words (its comment), Eq. 5's
+white ``1.5 · 2^(zones − 5)`` must exceed the log-average ``l_w``, as
+``log2 1.5 − 5 = −4.415037``. But it compares a white in scaled units (its tone mapper uses
+``L_white`` on ``(key / l_w) · Y``, ``ToneMapperSoA.cpp``) with ``l_w`` in image units, and
+its fallback ``1.5 · L_max`` is in image units too. Multiplying the scene by ``k`` then moves
+the guard by ``log2 k`` zones and can switch the white point, although the operator
+promises scale invariance (key, ``L_white`` and ``L̄_w`` measured). hdrjax evaluates both
+sides of the guard, and the fallback, in scaled units (the log-average becomes
+``s · L̄``, about the key ``a``), which equals hdritools' test exactly where image and scaled
+units coincide (``s = 1``) and is invariant under ``L → kL`` everywhere else.
 """
 
 from typing import Literal
@@ -51,20 +64,25 @@ def jgt_key(st: LuminanceStats) -> Array:
 
 def jgt_white_terms(st: LuminanceStats, scale: Array) -> tuple[Array, dict[str, Array]]:
     """:func:`jgt_white` and the intermediate terms it used: ``zones``
-    (``log2 L_max − log2 L_min``) and ``guard`` (True where hdritools' guard chose
-    ``1.5 · max(L)`` in scaled units over Eq. 5)."""
+    (``log2 L_max − log2 L_min``) and ``guard`` (True where hdritools' guard, evaluated in
+    scaled units, chose ``1.5 · max(L)`` in scaled units over Eq. 5; see the module
+    docstring for why scaled units)."""
     any_pos = st.n_positive > 0
     L_max = jnp.where(any_pos & (st.max > 0), st.max, 1.0)  # safe for log and its gradient
     zones = jnp.log2(L_max) - jnp.log2(st.min_positive)  # no overflow of the ratio
     eq5 = 1.5 * jnp.exp2(jnp.minimum(zones - 5.0, 100.0))  # 2^100: finite in float32
-    guard = zones <= jnp.log2(st.log_average_trimmed) + 4.415037
+    # log2 of the trimmed log-average in scaled units, as a sum of logs (no overflow of the
+    # product); a boolean, so no gradient flows through it
+    log2_avg_scaled = jnp.log2(scale) + jnp.log2(st.log_average_trimmed)
+    guard = zones <= log2_avg_scaled + 4.415037
     white = jnp.where(guard, 1.5 * L_max * scale, eq5)
     white = jnp.where(any_pos, jnp.maximum(white, jnp.finfo(white.dtype).tiny), 1.0)
     return white, {"zones": zones, "guard": guard}
 
 
 def jgt_white(st: LuminanceStats, scale: Array) -> Array:
-    """JGT 2002 Eq. 5 white point (scaled units) from the full range, with hdritools' guard.
+    """JGT 2002 Eq. 5 white point (scaled units) from the full range, with hdritools' guard
+    evaluated in scaled units (module docstring).
 
     ``scale`` is ``a / L̄_w``, the factor from world to scaled luminance.
     """

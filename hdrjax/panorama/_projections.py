@@ -33,6 +33,8 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
+
 
 @functools.partial(jax.jit, static_argnames=("wrap_x",))
 def sample_bilinear(
@@ -53,6 +55,7 @@ def sample_bilinear(
     Returns:
         ``x.shape + (C,)`` samples.
     """
+    _check.shape(img, "img", channels=None, ndim=3)
     img = jnp.asarray(img)
     if img.dtype in (jnp.float16, jnp.bfloat16):  # half floats are computed in float32
         img = img.astype(jnp.result_type(float))
@@ -119,6 +122,8 @@ def sample_equirect(
     img: Float[ArrayLike, "H W C"], d: Float[ArrayLike, "*S 3"]
 ) -> Float[Array, "*S C"]:
     """Bilinear lookup of an equirectangular map in directions ``d`` (seam wrapped)."""
+    _check.shape(d, "d", min_ndim=1)
+    _check.shape(img, "img", channels=None, ndim=3)
     img = jnp.asarray(img)
     x, y = direction_to_equirect(d, img.shape[0], img.shape[1])
     return sample_bilinear(img, x, y, wrap_x=True)
@@ -151,12 +156,16 @@ def cubemap_directions(size: int) -> Float[Array, "6 S S 3"]:
 @functools.partial(jax.jit, static_argnames=("size",))
 def equirect_to_cubemap(img: Float[ArrayLike, "H W C"], size: int) -> Float[Array, "6 S S C"]:
     """Resample an equirectangular map into six ``size × size`` cube faces (OpenGL order)."""
+    _check.integer(size, "size")
+    _check.shape(img, "img", channels=None, ndim=3)
     return sample_equirect(img, cubemap_directions(size))
 
 
 @functools.partial(jax.jit, static_argnames=("height",))
 def cubemap_to_equirect(faces: Float[ArrayLike, "6 S S C"], height: int) -> Float[Array, "H W C"]:
     """Resample cube faces into an equirectangular map of ``height × 2 height``."""
+    _check.integer(height, "height")
+    _check.cube(faces, "faces", channels=None, batch=False)
     faces = jnp.asarray(faces)
     size = faces.shape[1]
     d = equirect_directions(height, 2 * height)
@@ -217,6 +226,9 @@ def equirect_to_fisheye(
     img: Float[ArrayLike, "H W C"], size: int, *, fov_deg: float = 180.0, fill: float = 0.0
 ) -> Float[Array, "S S C"]:
     """An equidistant fisheye view (``size × size``, looking along −Z) of an equirect map."""
+    _check.positive(fov_deg, "fov_deg")
+    _check.integer(size, "size")
+    _check.shape(img, "img", channels=None, ndim=3)
     d, inside = fisheye_directions(size, size, fov_deg=fov_deg)
     out = sample_equirect(img, d)
     return jnp.where(inside[..., None], out, jnp.asarray(fill, out.dtype))
@@ -230,6 +242,9 @@ def fisheye_to_equirect(
 
     Directions outside the fisheye's field of view get ``fill``.
     """
+    _check.positive(fov_deg, "fov_deg")
+    _check.integer(height, "height")
+    _check.shape(img, "img", channels=None, ndim=3)
     img = jnp.asarray(img)
     h, w = img.shape[0], img.shape[1]
     d = equirect_directions(height, 2 * height)
@@ -266,6 +281,8 @@ def polar_to_cartesian(
     Returns:
         The disc: centre ``θ = 0``, radius ∝ θ, ``φ = 0`` to the right, counter-clockwise.
     """
+    _check.integer(size, "size")
+    _check.shape(img, "img", channels=None, ndim=3)
     if not theta_max_deg > 0:  # static arguments: checked at trace time
         raise ValueError(f"theta_max_deg must be > 0, got {theta_max_deg}")
     view = theta_max_deg if theta_view_deg is None else float(theta_view_deg)

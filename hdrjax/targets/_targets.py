@@ -7,8 +7,9 @@ differentiable with respect to the display image (and so to the operator's param
 
 - display luminance ``L_d = luminance(clip(rgb, 0, 1))`` (Rec. 709 weights by default):
   values beyond display white are clipped first, as a display would.
-- percentiles use a sort (``hdrjax.stats.percentile(method="exact")``), whose gradient is
-  that of the interpolated order statistics; sorting costs ~0.7 Mpixel/s on CPU, which is why
+- percentiles are exact order statistics (partial selection with ``jax.lax.top_k`` for
+  percentiles away from the median, else a sort), whose gradient is that of the interpolated
+  order statistics; a full sort costs ~0.7 Mpixel/s on CPU, which is one reason
   :func:`hdrjax.fit.fit` works on a downscaled image by default.
 - the clipped fraction and the histogram are *soft* (logistic steps of width ``softness``),
   so they have useful gradients; they converge to the hard counts as ``softness → 0``.
@@ -25,8 +26,10 @@ from collections.abc import Sequence
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
 from .._stats import percentile
 from ..display import srgb_encode
@@ -45,6 +48,7 @@ def _vec(x: ArrayLike) -> Array:
 
 def _display(rgb: ArrayLike) -> Array:
     """The display image as an array; half floats are computed in the default float."""
+    _check.shape(rgb, "display")
     rgb = jnp.asarray(rgb)
     if rgb.dtype in (jnp.float16, jnp.bfloat16):
         rgb = rgb.astype(jnp.result_type(float))
@@ -123,6 +127,9 @@ class MeanLuminance(AbstractStatisticTarget):
         static=True, default=REC709_WEIGHTS, converter=_weights
     )
 
+    def __check_init__(self):
+        _check.in_range(self.value, "value", 0.0, 1.0)  # display luminance
+
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " 1"]:
         L, finite = _display_luminance(display, self.weights)
         return _masked_mean(L, finite)[None]
@@ -132,11 +139,21 @@ class Percentiles(AbstractStatisticTarget):
     """Display-luminance percentiles: ``s_i = P_{q_i}(L_d)`` (linear interpolation between
     order statistics, as ``numpy.percentile``; pixels with ``L_d ≤ 0`` are excluded).
 
+    Percentiles far from the median are found by partial selection instead of a full sort:
+    ``P_q`` with ``q ≥ 50`` lies among the ``⌊(N − 1)(1 − q/100)⌋ + 3`` largest of ``N``
+    pixels (one more per Mpixel, for rounding; ``jax.lax.top_k``, ~15× faster than XLA:CPU's
+    sort for ``P99`` of 2048 pixels), ``q < 50`` among the smallest. The selection size is
+    fixed when the target is built (from the concrete ``q``); a ``q`` changed later that
+    falls outside it, or a selection larger than a quarter of the image, sorts instead.
+    Both give the same values and gradients.
+
     Attributes:
         q: percentiles in [0, 100], e.g. ``(1, 99)``.
         value: the wanted display luminances, e.g. ``(0.02, 0.95)``.
         weight: residual weight(s) (1).
         weights: luminance weights (Rec. 709).
+        select: ``(largest q below 50, smallest q from 50)`` served by partial selection,
+            set from ``q`` at construction (``None``: always sort).
     """
 
     q: Array = eqx.field(converter=_vec)
@@ -145,14 +162,92 @@ class Percentiles(AbstractStatisticTarget):
     weights: tuple[float, float, float] = eqx.field(
         static=True, default=REC709_WEIGHTS, converter=_weights
     )
+    select: tuple[float | None, float | None] | None = eqx.field(static=True, default=None)
+
+    def __init__(
+        self,
+        q: ArrayLike,
+        value: ArrayLike,
+        weight: ArrayLike = 1.0,
+        weights: Sequence[float] = REC709_WEIGHTS,
+    ):
+        self.q = _vec(q)
+        self.value = _vec(value)
+        self.weight = _arr(weight)
+        self.weights = _weights(weights)
+        self.select = _selection_range(self.q)
 
     def __check_init__(self):
+        _check.in_range(self.q, "q", 0.0, 100.0)
         if self.q.shape != self.value.shape:
-            raise ValueError(f"Percentiles: q {self.q.shape} and value {self.value.shape} differ")
+            raise ValueError(
+                f"q: expected one value per percentile, got q of shape {self.q.shape} and"
+                f" value of shape {self.value.shape}"
+            )
 
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " n"]:
         L, finite = _display_luminance(display, self.weights)
-        return percentile(L, self.q, method="exact", where=finite)[0]
+        return _percentiles(L, finite, self.q, self.select)
+
+
+def _selection_range(q: Array) -> tuple[float | None, float | None] | None:
+    """``(max q < 50, min q ≥ 50)`` of a concrete ``q`` (``None`` when ``q`` is traced)."""
+    try:
+        v = [float(x) for x in np.asarray(q).reshape(-1)]
+    except (TypeError, jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError):
+        return None
+    lo = [x for x in v if x < 50.0]
+    hi = [x for x in v if x >= 50.0]
+    return (max(lo) if lo else None, min(hi) if hi else None)
+
+
+def _percentiles(
+    L: Array, where: Array, q: Array, select: tuple[float | None, float | None] | None
+) -> Array:
+    """``numpy.percentile`` (linear) of the positive finite ``L[where]``, by partial selection
+    (``jax.lax.top_k``) where ``select`` allows it, else by a sort; NaN with no such pixel."""
+
+    def by_sort():
+        return percentile(L, q, method="exact", where=where)[0]
+
+    N = L.size
+    if select is None or N < 16:
+        return by_sort()
+    lo_q, hi_q = select
+    # the ranks needed for any count n ≤ N of valid pixels, with spare places for the
+    # rounding of q·(n − 1) in the image's dtype
+    spare = 3 + N // 1_000_000
+    k_lo = 0 if lo_q is None else min(N, int((N - 1) * max(lo_q, 0.0) / 100.0) + spare)
+    k_hi = 0 if hi_q is None else min(N, int((N - 1) * (1.0 - min(hi_q, 100.0) / 100.0)) + spare)
+    if max(k_lo, k_hi) > N // 4:
+        return by_sort()
+    x = L.reshape(-1)
+    valid = (jnp.isfinite(x) & (x >= jnp.finfo(x.dtype).tiny)) & where.reshape(-1)
+    n = jnp.sum(valid)
+    qs = jnp.asarray(q, x.dtype) / 100.0
+    pos = qs * (n - 1).astype(x.dtype)
+    j0 = jnp.floor(pos).astype(jnp.int32)
+    frac = pos - j0.astype(x.dtype)
+    j1 = jnp.minimum(j0 + 1, n - 1)
+    lower = qs < 0.5
+    v0 = v1 = jnp.zeros_like(qs)
+    # the selections cover q ≤ lo_q and q ≥ hi_q for every n; the test depends on q only,
+    # so under a vmap over frames (one shared target) the cond below stays a branch
+    q_pct = jnp.asarray(q)
+    ok = jnp.where(
+        lower, q_pct <= (-1.0 if lo_q is None else lo_q), q_pct >= (101.0 if hi_q is None else hi_q)
+    )
+    if k_lo:  # the k_lo smallest, ascending: rank j is at j
+        small = -jax.lax.top_k(jnp.where(valid, -x, -jnp.inf), k_lo)[0]
+        v0 = jnp.where(lower, jnp.take(small, jnp.clip(j0, 0, k_lo - 1)), v0)
+        v1 = jnp.where(lower, jnp.take(small, jnp.clip(j1, 0, k_lo - 1)), v1)
+    if k_hi:  # the k_hi largest, descending: rank j is at n − 1 − j
+        large = jax.lax.top_k(jnp.where(valid, x, -jnp.inf), k_hi)[0]
+        v0 = jnp.where(lower, v0, jnp.take(large, jnp.clip(n - 1 - j0, 0, k_hi - 1)))
+        v1 = jnp.where(lower, v1, jnp.take(large, jnp.clip(n - 1 - j1, 0, k_hi - 1)))
+    vals = jnp.where(n > 0, v0 + frac * (v1 - v0), jnp.nan)
+    # a q moved outside the selection after construction: sort (cond runs one branch)
+    return jax.lax.cond(jnp.all(ok), lambda: vals, by_sort)
 
 
 class ClippedFraction(AbstractStatisticTarget):
@@ -173,10 +268,17 @@ class ClippedFraction(AbstractStatisticTarget):
     threshold: float = eqx.field(static=True, default=1.0)
     softness: float = eqx.field(static=True, default=0.01)
 
+    def __check_init__(self):
+        _check.in_range(self.value, "value", 0.0, 1.0)  # a fraction of the pixels
+        _check.positive(self.softness, "softness")
+
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " 1"]:
         display = _display(display)
         finite = jnp.all(jnp.isfinite(display), axis=-1)
-        m = jnp.max(jnp.where(finite[..., None], display, 0.0), axis=-1)
+        # channel max as two elementwise maxima: fuses with its consumers; the reduction's
+        # JVP (an equality mask over the channel axis) made full-resolution fits ~4x slower
+        m = jnp.maximum(jnp.maximum(display[..., 0], display[..., 1]), display[..., 2])
+        m = jnp.where(finite, m, 0.0)
         step = jax.nn.sigmoid((m - self.threshold) / self.softness)
         return _masked_mean(step, finite)[None]
 

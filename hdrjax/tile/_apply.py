@@ -5,6 +5,7 @@ from collections.abc import Iterator, Sequence
 import jax.numpy as jnp
 import numpy as np
 
+from .. import _check
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
 from ._layout import Span, check_tile, spans
 from ._stats import measure_blocks, numpy_runner, stats_dtype
@@ -14,6 +15,7 @@ DEFAULT_TILE = (1024, 1024)
 
 
 def check_image(image) -> tuple[int, ...]:
+    _check.real(image, "image")
     shape = tuple(int(s) for s in np.shape(image))
     if len(shape) not in (2, 3) or shape[0] < 1 or shape[1] < 1:
         raise ValueError(f"image: expected shape (H, W) or (H, W, C), got {shape}")

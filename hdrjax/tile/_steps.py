@@ -13,10 +13,12 @@ from collections.abc import Callable, Sequence
 from typing import Literal
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .. import _check
 from .._stats import LuminanceStats
 from ..filters import mean_filter, median_filter
 from ..filters._api import check_passes, check_size
@@ -202,6 +204,7 @@ class Tonemap(AbstractStep):
         return bool(self.operator.unset())
 
     def halo(self, shape):
+        _check.shape(jax.ShapeDtypeStruct(tuple(shape), jnp.float32), "image", ndim=3)
         op = self.operator
         if isinstance(op, Reinhard2002Local):
             r = _radius(max(scales(op.s_low, op.s_high, op.num)))

@@ -41,6 +41,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import luminance
 from ..display import gamma_encode
 from ._fovea import adaptation_luminance
@@ -76,6 +77,7 @@ def fechner_brightness(
     clamped below at 1e-7 cd/m². Stands in for Shklover's formula (seed 002, Eq. 3; not
     found). Inverse: :func:`fechner_luminance`.
     """
+    _check.real(L, "L")
     L = jnp.maximum(_as_float(L), LMIN)
     L_a = jnp.maximum(_as_float(L_a), LMIN)
     return (L_a / tvi(L_a)) * jnp.log(L / L_a)
@@ -85,6 +87,7 @@ def fechner_luminance(
     B: Float[ArrayLike, "*shape"], L_a: Float[ArrayLike, ""]
 ) -> Float[Array, "*shape"]:
     """Inverse of :func:`fechner_brightness`: ``L = L_a exp(B ΔL(L_a)/L_a)``."""
+    _check.real(B, "B")
     L_a = jnp.maximum(_as_float(L_a), LMIN)
     return L_a * jnp.exp(_as_float(B) * tvi(L_a) / L_a)
 

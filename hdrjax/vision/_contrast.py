@@ -24,6 +24,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from ._pcond import tvi
 from ._photometry import LMIN, _as_float, check_rgb, restore, sanitize
 
@@ -43,6 +44,7 @@ def ward1994_scale(
     L_wa: Float[ArrayLike, "*shape"], L_da: Float[ArrayLike, "*shape"]
 ) -> Float[Array, "*shape"]:
     """Ward 1994 scale factor ``m = [(1.219 + L_da^0.4)/(1.219 + L_wa^0.4)]^2.5``."""
+    _check.real(L_wa, "L_wa")
     L_wa = jnp.maximum(_as_float(L_wa), 0.0)
     L_da = jnp.maximum(_as_float(L_da), 0.0)
     # x**0.4 has an infinite derivative at 0; evaluate it at a tiny positive value there.
@@ -83,6 +85,7 @@ def contrast_scale(
     ``"pcond"``: ``m = tvi(L_da)/tvi(L_wa)`` (:func:`hdrjax.vision.tvi`); ``"ward1994"``:
     :func:`ward1994_scale`. ``L_da`` is :func:`display_adaptation`.
     """
+    _check.real(L_wa, "L_wa")
     L_da = display_adaptation(model, display_max, display_range)
     L_wa = jnp.maximum(_as_float(L_wa), LMIN)
     if model == "pcond":

@@ -13,6 +13,7 @@ doi:10.1145/237170.237262. Transcribed from banterle/HDR_Toolbox ``TpFerwerda.m`
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from ._photometry import _as_float
 
 
@@ -32,6 +33,7 @@ def tvi_photopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         >>> float(tvi_photopic(100.0))  # Weber branch: 100 * 10**-1.255
         5.559...
     """
+    _check.real(L_a, "L_a")
     L_a = _as_float(L_a)
     x = _log10_safe(L_a, 10.0**-2.6)
     mid = (0.249 * jnp.clip(x, -2.6, 1.9) + 0.65) ** 2.7 - 0.72
@@ -45,6 +47,7 @@ def tvi_scotopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     With ``x = log10 L_a`` (scotopic cd/m²): ``t_s = -2.86`` for ``x <= -3.94``;
     ``x - 0.395`` for ``x >= -1.44``; ``(0.405 x + 1.6)^2.18 - 2.86`` between.
     """
+    _check.real(L_a, "L_a")
     L_a = _as_float(L_a)
     x = _log10_safe(L_a, 10.0**-3.94)
     mid = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86

@@ -10,8 +10,10 @@ foveal sample, as many as pcond draws — stands in for pcond's random subset
 """
 
 import functools
+from collections.abc import Callable
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
@@ -33,6 +35,47 @@ def block_sums(x: Array, w: Array, by: int, bx: int) -> tuple[Array, Array]:
     ww = jnp.pad(jnp.broadcast_to(w, x.shape), pad)
     shape = (Hb, by, Wb, bx) + x.shape[2:]
     return xw.reshape(shape).sum(axis=(1, 3)), ww.reshape(shape).sum(axis=(1, 3))
+
+
+SLICE_BLOCK_MAX = 64
+"""Largest block side reduced by strided slices in :func:`block_reduce` (larger blocks: a
+reshape reduction; the unrolled slices would make the program too long)."""
+
+
+def block_reduce(
+    x: Array, by: int, bx: int, op: Callable[[Array, Array], Array], fill: float
+) -> Array:
+    """Reduce ``by × bx`` blocks of the first two axes of ``x`` with ``op`` (add/min/max).
+
+    Partial blocks at the bottom/right edge reduce the pixels that exist (``fill``, the
+    identity of ``op``, stands for the others). Blocks up to :data:`SLICE_BLOCK_MAX` pixels
+    a side are reduced as ``op`` over strided slices (``x[i::by]``, then ``[:, j::bx]``),
+    each padded on its own to whole blocks: elementwise operations that XLA:CPU fuses and
+    vectorises, 3–5× faster than the ``(Hb, by, Wb, bx)`` reshape reduction of a padded
+    copy on 2048×1024 with 6×6 blocks.
+    """
+    H, W = x.shape[:2]
+    Hb, Wb = -(-H // by), -(-W // bx)
+    if max(by, bx) > SLICE_BLOCK_MAX:
+        pad = ((0, Hb * by - H), (0, Wb * bx - W)) + ((0, 0),) * (x.ndim - 2)
+        x = jnp.pad(x, pad, constant_values=fill)
+        red = {jnp.add: jnp.sum, jnp.minimum: jnp.min, jnp.maximum: jnp.max}[op]
+        r = red(x.reshape((Hb, by, Wb * bx) + x.shape[2:]), axis=1)
+        return red(r.reshape((Hb, Wb, bx) + x.shape[2:]), axis=2)
+
+    def strided(a: Array, axis: int, step: int, n: int) -> list[Array]:
+        out = []
+        for i in range(step):
+            s = jax.lax.slice_in_dim(a, i, a.shape[axis], step, axis=axis)
+            if s.shape[axis] < n:  # this row/column is missing from the last block
+                widths = [(0, 0)] * a.ndim
+                widths[axis] = (0, n - s.shape[axis])
+                s = jnp.pad(s, widths, constant_values=fill)
+            out.append(s)
+        return out
+
+    r = functools.reduce(op, strided(x, 0, by, Hb))
+    return functools.reduce(op, strided(r, 1, bx, Wb))
 
 
 def block_mean(x: Array, valid: Array, by: int, bx: int) -> tuple[Array, Array]:
@@ -169,6 +212,7 @@ __all__ = [
     "adaptation_luminance",
     "adaptation_samples",
     "block_mean",
+    "block_reduce",
     "block_sums",
     "mean2x2",
     "mean_brightness",

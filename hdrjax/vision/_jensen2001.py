@@ -22,11 +22,13 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from ._ferwerda1996 import _log10_safe
 from ._photometry import (
     _as_float,
     _chroma_key,
     check_rgb,
+    largest_component_reciprocal,
     restore,
     rgb_to_xyz,
     sanitize,
@@ -44,6 +46,7 @@ LOG_LOW, LOG_HIGH = -2.0, 0.6
 
 def blue_shift_weight(Y: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     """Jensen et al.'s photopic share ``s``: smoothstep of log10 Y from -2 to 0.6."""
+    _check.real(Y, "Y")
     Y = _as_float(Y)
     x = jnp.clip((_log10_safe(Y, 10.0**LOG_LOW) - LOG_LOW) / (LOG_HIGH - LOG_LOW), 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)
@@ -72,11 +75,15 @@ def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     X, Y, Z = rgb_to_xyz(x_, chromaticities)
     V = scotopic_luminance(x_, chromaticities=chromaticities)
     s = blue_shift_weight(Y)
-    tot = X + Y + Z
+    # chromaticity from X, Y, Z over the pixel's largest |X|, |Y|, |Z| (constant under
+    # differentiation): d(X/tot)/d tot = -X/tot² would over/underflow tot² at 1e±20 cd/m²
+    r = largest_component_reciprocal(X, Y, Z)
+    xr, yr = X * r, Y * r
+    tot = (xr + yr) + Z * r
     has = tot > 0
     tot_s = jnp.where(has, tot, 1.0)
-    cx = jnp.where(has, X / tot_s, BLUE_WHITE[0])
-    cy = jnp.where(has, Y / tot_s, BLUE_WHITE[1])
+    cx = jnp.where(has, xr / tot_s, BLUE_WHITE[0])
+    cy = jnp.where(has, yr / tot_s, BLUE_WHITE[1])
     cx = (1.0 - s) * BLUE_WHITE[0] + s * cx
     cy = (1.0 - s) * BLUE_WHITE[1] + s * cy
     Yn = ROD_SCALE * (1.0 - s) * V + s * Y

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import luminance
 from . import _fft
 from ._ferwerda1996 import _log10_safe
@@ -53,6 +54,7 @@ def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         >>> round(float(tvi(1.0)), 4)  # cone branch at x = 0: 10**(0.65**2.7 - 0.72)
         0.3913
     """
+    _check.real(L_a, "L_a")
     L_a = _as_float(L_a)
     x = _log10_safe(L_a, 1.148e-4)
     rod = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
@@ -73,6 +75,7 @@ def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         >>> round(float(acuity(1.0)), 2)
         31.53
     """
+    _check.real(L_a, "L_a")
     x = _log10_safe(_as_float(L_a), LMIN)
     return 17.25 * jnp.arctan(1.4 * x + 0.35) + 25.72
 
@@ -83,6 +86,7 @@ def mesopic_weight(L: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     ``c = (L - 5.62e-3)/(5.62 - 5.62e-3)`` clamped to [0, 1]: 0 (rods only) at or below
     5.62e-3 cd/m², 1 (cones only) at or above 5.62 cd/m², linear in ``L`` between.
     """
+    _check.real(L, "L")
     L = _as_float(L)
     return jnp.clip((L - BOT_MESOPIC) / (TOP_MESOPIC - BOT_MESOPIC), 0.0, 1.0)
 

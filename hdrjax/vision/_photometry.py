@@ -12,10 +12,12 @@ Constants are Radiance ``pcond``'s (G. Ward Larson, NREL/Radiance ``src/px/pcond
 import functools
 from collections.abc import Sequence
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import REC709_CHROMATICITIES, luminance, luminance_weights
 
 LMIN = 1e-7
@@ -39,6 +41,7 @@ def _as_float(x: ArrayLike) -> Array:
 
 def check_rgb(rgb: ArrayLike, name: str = "rgb", *, image: bool = False) -> Array:
     """``rgb`` as a float array with 3 channels last (and 3 dims when ``image``)."""
+    _check.real(rgb, name)
     rgb = _as_float(rgb)
     if rgb.ndim < 1 or rgb.shape[-1] != 3:
         raise ValueError(f"{name}: expected channels-last RGB (..., 3), got shape {rgb.shape}")
@@ -115,6 +118,29 @@ def xyz_to_rgb(
     return jnp.stack([r, g, b], axis=-1)
 
 
+SCOTOPIC_RATIO_MAX = 300.0
+"""Cap on ``(Y + Z)/X`` in :func:`scotopic_luminance`. Every real colour has
+``(Y + Z)/X = (1 - x)/x <= 274`` (CIE 1931 2° spectral locus, smallest chromaticity
+``x = 0.00364`` at 504 nm; the purples and the inside of the locus have larger ``x``), so the
+cap changes only XYZ that no light produces (negative-channel noise, primaries outside the
+locus)."""
+
+
+def largest_component_reciprocal(X: Array, Y: Array, Z: Array) -> Array:
+    """``1 / max(|X|, |Y|, |Z|)`` per pixel, held constant under differentiation (1 where
+    that maximum is 0 or not finite).
+
+    Ratios of X, Y, Z formed after multiplying by it have the same value, but their
+    derivatives no longer square a component: ``d(a/b)/db = -a/b²`` over- or underflows
+    ``b²`` in float32 for ``|b|`` beyond 1e±19. It is a factor rather than a divisor
+    because dividing by the maximum instead gave a non-finite compiled (jit) gradient of
+    :func:`~hdrjax.vision.blue_shift` near 1e-37 cd/m² on XLA:CPU (eager was finite).
+    """
+    m = jnp.maximum(jnp.maximum(jnp.abs(X), jnp.abs(Y)), jnp.abs(Z))
+    m = jnp.where((m > 0) & jnp.isfinite(m), m, 1.0)
+    return jax.lax.stop_gradient(1.0 / m)
+
+
 def scotopic_luminance(
     rgb: Float[ArrayLike, "*batch 3"], *, chromaticities: Sequence[float] | None = None
 ) -> Float[Array, "*batch"]:
@@ -125,6 +151,14 @@ def scotopic_luminance(
     primaries. Pixels with ``X <= 0`` (black, or out of gamut) and negative results give 0.
     For an equal-energy white ``V/Y = 2.31``, close to pcond's ``SWNORM = 2.26``.
 
+    Domain: real colours, for which ``(Y + Z)/X <= 274`` (:data:`SCOTOPIC_RATIO_MAX`).
+    Out-of-gamut XYZ with ``X > 0`` but ``|Y| + |Z| > 300 X`` use
+    ``X_eff = (|Y| + |Z|)/300`` in place of ``X`` (the formula's value is continuous there);
+    ``cielum`` itself would return up to ``±∞`` as ``X → 0⁺``. Numerics: the ratio is formed
+    from X, Y, Z scaled by :func:`largest_component_reciprocal`, so value and gradient stay
+    finite from 1e-38 to 1e33 cd/m² in float32 (``d/dX (Y + Z)/X = -(Y + Z)/X²`` of the
+    unscaled formula over- or underflows ``X²`` beyond 1e±19).
+
     Args:
         rgb: linear RGB, cd/m², channels last.
         chromaticities: the image's primaries (``None``: Rec.709/D65).
@@ -133,9 +167,13 @@ def scotopic_luminance(
         ``V`` with shape ``rgb.shape[:-1]``.
     """
     X, Y, Z = rgb_to_xyz(rgb, chromaticities)
-    ok = X > 0
-    Xs = jnp.where(ok, X, 1.0)
-    V = Y * (1.33 * (1.0 + (Y + Z) / Xs) - 1.68)
+    r = largest_component_reciprocal(X, Y, Z)
+    x, y, z = X * r, Y * r, Z * r  # the largest of |x|, |y|, |z| is 1
+    ok = x > 0
+    # x > 0 and max(|x|, |y|, |z|) = 1 give x_eff >= 1/300, so d ratio/dx <= 2·300²
+    x_eff = jnp.maximum(x, (jnp.abs(y) + jnp.abs(z)) / SCOTOPIC_RATIO_MAX)
+    ratio = (y + z) / jnp.where(ok, x_eff, 1.0)
+    V = Y * (1.33 * (1.0 + ratio) - 1.68)
     return jnp.where(ok, jnp.maximum(V, 0.0), 0.0)
 
 
@@ -163,10 +201,12 @@ __all__ = [
     "BOT_MESOPIC",
     "LMAX",
     "LMIN",
+    "SCOTOPIC_RATIO_MAX",
     "SWNORM",
     "TOP_MESOPIC",
     "check_rgb",
     "finite_pixels",
+    "largest_component_reciprocal",
     "restore",
     "rgb_to_xyz",
     "rgb_to_xyz_matrix",

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from .._colour import luminance
 from ._acuity import acuity_loss, max_levels
 from ._contrast import DISPLAY_MAX, DISPLAY_RANGE, ContrastModel, contrast
@@ -154,6 +155,7 @@ class HumanVision(eqx.Module):
             chromaticities: the image's primaries.
             dtype: float dtype of the images (default: JAX's default float).
         """
+        _check.image_size(shape)
         H, W = (int(v) for v in tuple(shape)[:2])
         if isinstance(view, ResolvedView):
             if (view.height, view.width) != (H, W):

@@ -45,6 +45,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .. import _check
 from . import _fft
 from ._photometry import BOT_MESOPIC, TOP_MESOPIC, _as_float, check_rgb, restore, sanitize
 from ._view import ResolvedView, View, resolve_view
@@ -96,16 +97,24 @@ def spencer1995_psf(
     Returns:
         ``Σ w_i f_i(θ)`` (see the module docstring), same shape as ``theta_deg``.
     """
+    _check.real(theta_deg, "theta_deg")
     w = _weights(variant)
     t = jnp.maximum(_as_float(theta_deg), 0.0)
     lam = float(wavelength_nm)
+    # Written so that no intermediate overflows, nor its derivative, up to the float max:
+    # 1/(θ + a) before the power (the derivative of 20.91/(θ + a)³ is otherwise formed from
+    # (θ + a)² = inf and ((θ + a)³)⁻² = 0 at 1e32° in float32: NaN), and the Gaussians'
+    # arguments clipped where exp(-·) is already 0 in float64 (exp(-2500), exp(-1975)),
+    # which leaves their values unchanged.
+    u = 1.0 / (t + _A)
     p = (
-        w[0] * 2.61e6 * jnp.exp(-((t / _A) ** 2))
-        + w[1] * 20.91 / (t + _A) ** 3
-        + w[2] * 72.37 / (t + _A) ** 2
+        w[0] * 2.61e6 * jnp.exp(-((jnp.minimum(t, 1.0) / _A) ** 2))
+        + w[1] * 20.91 * u**3
+        + w[2] * 72.37 * u**2
     )
     if w[3]:
-        p = p + w[3] * 436.9 * (568.0 / lam) * jnp.exp(-19.75 * (t - 3.0 * lam / 568.0) ** 2)
+        d = jnp.clip(t - 3.0 * lam / 568.0, -10.0, 10.0)
+        p = p + w[3] * 436.9 * (568.0 / lam) * jnp.exp(-19.75 * d**2)
     return p
 
 

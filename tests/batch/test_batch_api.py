@@ -38,7 +38,8 @@ def log_average(L):
 
 
 def jgt_parameters(L):
-    """JGT 2002 key (Eq. 4) and white (Eq. 5, hdritools' guard) from all pixels ``L``."""
+    """JGT 2002 key (Eq. 4) and white (Eq. 5, hdritools' guard in scaled units) from all
+    pixels ``L``."""
     Lp = L[L > 0]
     # hdrjax's percentile is the order statistic x_(floor(q (n - 1))) (hdrjax._stats)
     p01, p99 = np.percentile(Lp, [1, 99], method="lower")
@@ -47,7 +48,7 @@ def jgt_parameters(L):
     key = 0.18 * 4 ** ((2 * math.log2(trimmed) - l1 - l99) / (l99 - l1))
     lbar = log_average(L)
     zones = math.log2(Lp.max()) - math.log2(Lp.min())
-    if zones <= math.log2(trimmed) + 4.415037:
+    if 1.5 * 2 ** (zones - 5) <= trimmed * key / lbar:  # Eq. 5's white vs the average
         white = 1.5 * Lp.max() * key / lbar
     else:
         white = 1.5 * 2 ** (zones - 5)

@@ -28,11 +28,19 @@ Policies the generic tests check (the numeric contract every module docstring st
 - **documented non-finite outputs** are listed per case in ``nonfinite_ok`` (e.g. the
   percentiles of an image without a positive pixel are NaN; a map without light has
   threshold ``inf``).
+
+Bad input (``test_bad_input.py``, policy in ``hdrjax/_check.py``): every case is fed each
+form of :data:`BAD_INPUTS` (wrong rank, wrong channel count, integer/bool/complex dtype) and
+must raise a one-line ``ValueError`` naming the argument and the expected form — unless the
+case declares the form in ``accepts`` with its reason and a reference for the result.
+Integer and bool images are promoted to float by policy (:data:`PROMOTED`): the result must
+equal the result for the same values as float32. ``params`` lists out-of-range parameters
+(argument name, call) that must raise a ``ValueError`` naming that argument.
 """
 
 import dataclasses
 import inspect
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import equinox as eqx
 import jax
@@ -40,11 +48,13 @@ import jax.numpy as jnp
 import numpy as np
 
 import hdrjax
+import hdrjax.batch as hb
 import hdrjax.display as hd
 import hdrjax.filters as hf
 import hdrjax.lights as hl
 import hdrjax.panorama as hp
 import hdrjax.targets as ht
+import hdrjax.tile as htile
 import hdrjax.vision as hv
 from hdrjax import stats
 
@@ -76,6 +86,18 @@ class Case:
     """Input dtypes of the family test (slow compiles: fewer)."""
     module: Callable | None = None
     """For Module cases: ``module(x) -> eqx.Module`` whose array fields are parameters."""
+    accepts: Mapping[str, tuple[str, Callable]] = dataclasses.field(default_factory=dict)
+    """Bad-input forms (keys of :data:`BAD_INPUTS`) the case accepts by design, each as
+    ``(reason, reference)``; ``reference(fn, good, kind)`` gives the expected output for
+    ``BAD_INPUTS[kind](good)``."""
+    params: tuple[tuple[str, Callable], ...] = ()
+    """Out-of-range parameters: ``(argument name, fn(x) calling the case with it)``; each
+    must raise a ValueError naming the argument."""
+    equals: tuple[Callable, float, float] | None = None
+    """``(whole, rtol, atol)``: another way of computing ``whole(x)`` (tiles, a batch
+    pipeline) — its outputs must equal ``whole``'s on every hard family
+    (``test_equivalence.py``): NaN where ``whole`` has NaN, finite values within
+    ``rtol``/``atol`` (atol relative to the largest finite output)."""
 
 
 def no_light(img, lo=0.0, hi=np.inf):
@@ -94,6 +116,113 @@ def _cd(x):
     return x * SCALE
 
 
+# --- bad input (test_bad_input.py) ------------------------------------------------------
+BAD_INPUTS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    # wrong rank: one channel plane (H, W) and one row (W,) of a good (H, W, 3) image
+    "rank2": lambda g: g[..., 0],
+    "rank1": lambda g: g[0, :, 0],
+    # wrong channel count: RGBA-like (red repeated as the 4th channel), and one channel
+    "channels4": lambda g: np.concatenate([g, g[..., :1]], axis=-1),
+    "channels1": lambda g: g[..., :1],
+    # wrong dtype
+    "int": lambda g: np.round(g).astype(np.int32),
+    "bool": lambda g: g > 1.0,
+    "complex": lambda g: g.astype(np.complex64),
+}
+
+PROMOTED = {
+    "int": "integer images are promoted to the default float, as NumPy ufuncs do",
+    "bool": "bool images (masks) are promoted to the default float (0.0 and 1.0)",
+}
+"""Dtype forms every case accepts (policy of hdrjax/_check.py): the result must equal the
+result for the same values as float32."""
+
+
+def channels_of(out, kind):
+    """The part of an output for the good image that the bad form of ``kind`` must give,
+    for functions that act on each value or each channel on its own."""
+    if kind == "rank2":
+        return out[..., 0]
+    if kind == "rank1":
+        return out[0, :, 0]
+    if kind == "channels1":
+        return out[..., :1]
+    if kind == "channels4":
+        return np.concatenate([out, out[..., :1]], axis=-1)
+    raise KeyError(kind)
+
+
+def per_value(fn, good, kind):
+    """Reference for elementwise / per-channel functions: the same values' outputs."""
+    return [channels_of(np.asarray(v), kind) for v in _float_leaves(fn(good))]
+
+
+def grey(fn, good, kind):
+    """Reference for one channel: the RGB image with that channel in R, G and B (its
+    luminance is the channel; a vector median of grey pixels is the scalar median)."""
+    assert kind == "channels1"
+    rgb = np.repeat(good[..., :1], 3, axis=-1)
+    return [np.asarray(v)[..., :1] for v in _float_leaves(fn(rgb))]
+
+
+def vector_median_nearest(img, size=3):
+    """NumPy vector median (the window pixel with the least summed Euclidean distance to the
+    window's pixels; first in row-major window order on ties), edges replicated."""
+    r = size // 2
+    pad = np.pad(img, ((r, r), (r, r), (0, 0)), mode="edge").astype(np.float64)
+    out = np.empty(img.shape, np.float64)
+    for i in range(img.shape[0]):
+        for j in range(img.shape[1]):
+            w = pad[i : i + size, j : j + size].reshape(-1, img.shape[-1])
+            d = np.sqrt(((w[:, None] - w[None]) ** 2).sum(-1)).sum(1)
+            out[i, j] = w[np.argmin(d)]
+    return out
+
+
+SAME_PATH = None
+"""A reference of ``None``: the form takes the code path whose values another form or case
+checks; the test compares output shapes and dtypes (``jax.eval_shape``, no compile)."""
+
+ELEMENTWISE = {
+    "rank2": ("a formula applied to each value: any shape", per_value),
+    "channels4": ("a formula applied to each value: any shape", per_value),
+    "rank1": ("a formula applied to each value: any shape (values: rank2)", SAME_PATH),
+    "channels1": ("a formula applied to each value: any shape (values: rank2)", SAME_PATH),
+}
+PER_CHANNEL = {
+    k: ("filters act on each channel: any channel count C (channels last)", per_value)
+    for k in ("channels4", "channels1")
+}
+PER_CHANNEL_SAME = {
+    k: ("the edge modes share the channel loop (values: mode nearest)", SAME_PATH)
+    for k in ("channels4", "channels1")
+}
+RESAMPLE = {
+    "channels4": ("resampling interpolates each channel: any channel count C", per_value),
+    "channels1": ("resampling interpolates each channel (values: channels4)", SAME_PATH),
+}
+
+
+def _abs(x):
+    """``|x|`` for real inputs; other dtypes reach the function unchanged (bad-input test)."""
+    return jnp.abs(x) if not jnp.iscomplexobj(x) else x
+
+
+def _fdt(x):
+    """The image's float dtype for parameters; float32 for the bad dtypes of the bad-input
+    test (which must reach the function, not fail in the case's own parameters)."""
+    return x.dtype if jnp.issubdtype(x.dtype, jnp.floating) else jnp.float32
+
+
+def _bilinear(x):
+    """Samples at a corner, between pixels and at the far edge (any input rank, for the
+    bad-input test; coordinates in the image's float dtype, float32 for other dtypes)."""
+    h, w = (tuple(x.shape[:2]) + (1, 1))[:2]
+    dt = _fdt(x)
+    xs = jnp.asarray([0.0, 0.3, w - 1.0], dt)
+    return hp.sample_bilinear(x, xs, jnp.asarray([0.0, h / 2, h - 1.0], dt))
+
+
 def _module_case(make, **kw):
     """A Module applied to the image; ``make(x)`` builds it for the image's shape."""
     return Case(fn=lambda x: make(x)(x), module=make, **kw)
@@ -108,7 +237,10 @@ def _float_leaves(out):
 
 
 def _cube(x):
-    """Six square faces from an image (the cube-map inputs)."""
+    """Six square faces from an image (the cube-map inputs); an input of rank < 2 (the
+    bad-input test) is stacked as it is."""
+    if x.ndim < 2:
+        return jnp.stack([x] * 6)
     s = min(x.shape[0], x.shape[1])
     f = x[:s, :s]
     return jnp.stack([f, f[::-1], f[:, ::-1], jnp.swapaxes(f, 0, 1), f[::-1, ::-1], f])
@@ -135,7 +267,7 @@ CASES: dict[str, Case] = {
         batch=True,
     ),
     "DesaturateHighlights": _module_case(
-        lambda x: hd.DesaturateHighlights(threshold=jnp.asarray(2.0, x.dtype)),
+        lambda x: hd.DesaturateHighlights(threshold=jnp.asarray(2.0, _fdt(x))),
         covers=("hdrjax.display.DesaturateHighlights",),
         batch=True,
     ),
@@ -187,14 +319,14 @@ CASES: dict[str, Case] = {
         reach="stat",
     ),
     "stats.percentile": Case(
-        lambda x: stats.percentile(hdrjax.luminance(x), jnp.asarray(_Q, x.dtype))[0],
+        lambda x: stats.percentile(hdrjax.luminance(x), jnp.asarray(_Q, _fdt(x)))[0],
         ("hdrjax.stats.percentile",),
         reach="stat",
         grad=False,
         nonfinite_ok=no_light,  # documented: NaN when no pixel is finite and positive
     ),
     "stats.percentile_exact": Case(
-        lambda x: stats.percentile(hdrjax.luminance(x), jnp.asarray(_Q, x.dtype), method="exact")[
+        lambda x: stats.percentile(hdrjax.luminance(x), jnp.asarray(_Q, _fdt(x)), method="exact")[
             0
         ],
         ("hdrjax.stats.percentile",),
@@ -204,7 +336,9 @@ CASES: dict[str, Case] = {
     # --- vision: the formulas, applied per value (luminance in cd/m²) --------------------
     **{
         f"vision.{f.__name__}": Case(
-            lambda x, f=f: f(jnp.abs(_cd(x))), (f"hdrjax.vision.{f.__name__}",)
+            lambda x, f=f: f(_abs(_cd(x))),
+            (f"hdrjax.vision.{f.__name__}",),
+            accepts=ELEMENTWISE,
         )
         for f in (
             hv.acuity,
@@ -218,15 +352,15 @@ CASES: dict[str, Case] = {
         )
     },
     "vision.contrast_scale_ward1994": Case(
-        lambda x: hv.contrast_scale(jnp.abs(_cd(x)), model="ward1994"),
+        lambda x: hv.contrast_scale(_abs(_cd(x)), model="ward1994"),
         ("hdrjax.vision.contrast_scale",),
     ),
     "vision.ward1994_scale": Case(
-        lambda x: hv.ward1994_scale(jnp.abs(_cd(x)), 50.0), ("hdrjax.vision.ward1994_scale",)
+        lambda x: hv.ward1994_scale(_abs(_cd(x)), 50.0), ("hdrjax.vision.ward1994_scale",)
     ),
     "vision.fechner": Case(
         # brightness of the scene, then back: the inverse pair on the same values
-        lambda x: hv.fechner_luminance(hv.fechner_brightness(jnp.abs(_cd(x)), 10.0), 10.0),
+        lambda x: hv.fechner_luminance(hv.fechner_brightness(_abs(_cd(x)), 10.0), 10.0),
         ("hdrjax.vision.fechner_brightness", "hdrjax.vision.fechner_luminance"),
     ),
     "vision.scotopic_luminance": Case(
@@ -251,7 +385,7 @@ CASES: dict[str, Case] = {
         ("hdrjax.vision.perceptual_reproduction",),
     ),
     "vision.Budak2005": _module_case(
-        lambda x: hv.Budak2005(adaptation=jnp.asarray(10.0, x.dtype)),
+        lambda x: hv.Budak2005(adaptation=jnp.asarray(10.0, _fdt(x))),
         covers=("hdrjax.vision.Budak2005", "hdrjax.vision.ConeOpponentSpace"),
     ),
     "vision.analyze": Case(
@@ -305,16 +439,12 @@ CASES: dict[str, Case] = {
         reach="linear",
     ),
     "panorama.sample_equirect": Case(
-        lambda x: hp.sample_equirect(x, jnp.asarray(_dirs(), x.dtype)),
+        lambda x: hp.sample_equirect(x, jnp.asarray(_dirs(), _fdt(x))),
         ("hdrjax.panorama.sample_equirect",),
         reach="linear",
     ),
     "panorama.sample_bilinear": Case(
-        lambda x: hp.sample_bilinear(
-            x,
-            jnp.asarray([0.0, 0.3, x.shape[1] - 1.0], x.dtype),
-            jnp.asarray([0.0, x.shape[0] / 2, x.shape[0] - 1.0], x.dtype),
-        ),
+        _bilinear,
         ("hdrjax.panorama.sample_bilinear",),
         reach="linear",
     ),
@@ -359,7 +489,7 @@ for _i, _crit in enumerate(hf.CRITERIA):
 
 for _effect in hv.EFFECTS:
     CASES[f"vision.HumanVision[{_effect}]"] = _module_case(
-        (lambda e: lambda x: hv.HumanVision.build(x.shape, 30.0, (e,), dtype=x.dtype))(_effect),
+        (lambda e: lambda x: hv.HumanVision.build(x.shape, 30.0, (e,), dtype=_fdt(x)))(_effect),
         covers=("hdrjax.vision.HumanVision", "hdrjax.vision.View", "hdrjax.vision.ResolvedView"),
     )
     CASES[f"vision.simulate[{_effect}]"] = Case(
@@ -428,7 +558,7 @@ TARGET_CLASSES = sorted(
 )
 for _name in TARGET_CLASSES:
     if _name == "Reference":
-        _make = (lambda: lambda x: ht.Reference(jnp.full(x.shape, 0.5, x.dtype)))()
+        _make = (lambda: lambda x: ht.Reference(jnp.full(x.shape, 0.5, _fdt(x))))()
     else:
         _make = (lambda m: lambda x: m())(_TARGETS[_name])  # KeyError: add the new target
     CASES[f"targets.{_name}"] = Case(
@@ -440,6 +570,82 @@ for _name in TARGET_CLASSES:
         # has none (NaN statistics)
         nonfinite_ok=no_light if _name == "Percentiles" else None,
     )
+
+
+# --- tiles: hdrjax.tile.apply of every step equals the whole-image function ---------------
+_TILE = (4, 4)
+"""Tiles of the 8×8 family images: four tiles, each read with its step's halo."""
+_REINHARD = hdrjax.operators.Reinhard2002()
+
+
+def _reinhard(x):
+    """The whole-image reference, compiled once (``hdrjax.tonemap`` is jit-compiled)."""
+    return hdrjax.tonemap(x, "reinhard2002")
+
+
+_measure = jax.jit(lambda x: stats.measure(hdrjax.luminance(x)))
+_measure_plane = jax.jit(stats.measure)
+TILE_STEPS: dict[str, tuple[Callable, Callable, str, float]] = {
+    # name: (step, whole-image function, reach, rtol); the filters are bit-identical
+    "Mean": (lambda: htile.Mean(3), lambda x: hf.mean_filter(x, 3), "linear", 0.0),
+    "Median": (lambda: htile.Median(3), lambda x: hf.median_filter(x, 3), "window", 0.0),
+    "Neighbourhood": (
+        lambda: htile.Neighbourhood(lambda w: hf.mean_filter(w, 3, mode="reflect"), 1),
+        lambda x: hf.mean_filter(x, 3, mode="reflect"),
+        "linear",
+        0.0,
+    ),
+    # the key and log-average from the tiled first pass: equal to float32 rounding
+    "Tonemap": (lambda: htile.Tonemap(_REINHARD), _reinhard, "pixel", 1e-5),
+    # a truncated PSF (halo 1 pixel at 3.75°/pixel): another FFT size per window
+    "Glare": (
+        lambda: htile.Glare(30.0, radius_deg=1.5),
+        lambda x: hv.glare(x, 30.0, radius_deg=1.5),
+        "pixel",
+        1e-5,
+    ),
+}
+_missing_steps = sorted(
+    n
+    for n in htile.__all__
+    if inspect.isclass(getattr(htile, n))
+    and issubclass(getattr(htile, n), htile.AbstractStep)
+    and not inspect.isabstract(getattr(htile, n))
+    and n not in TILE_STEPS
+    and n != "AbstractStep"
+)
+assert not _missing_steps, f"new tile steps need an entry in TILE_STEPS: {_missing_steps}"
+for _name, (_step, _whole, _reach, _rtol) in TILE_STEPS.items():
+    CASES[f"tile.apply[{_name}]"] = Case(
+        (lambda st: lambda x: htile.apply(st(), np.asarray(x), tile=_TILE))(_step),
+        ("hdrjax.tile.apply", f"hdrjax.tile.{_name}", "hdrjax.tile.AbstractStep"),
+        reach=_reach,
+        size=3,
+        jit=False,  # NumPy side: windows are copied out of (memory-mapped) arrays
+        grad=False,
+        dtypes=("float32",),  # the steps' dtypes: their whole-image cases
+        equals=(_whole, _rtol, 1e-6),
+    )
+CASES["tile.statistics"] = Case(
+    lambda x: htile.statistics(np.asarray(x), tile=_TILE),
+    ("hdrjax.tile.statistics",),
+    reach="stat",
+    jit=False,
+    grad=False,
+    dtypes=("float32",),
+    equals=(_measure, 1e-5, 1e-6),
+)
+
+# --- batch: the frame pipeline on arrays equals the operator ---------------------------------
+_PIPELINE = hb.Pipeline("reinhard2002", format="exr")  # float32 linear output, no encoding
+CASES["batch.render_batch"] = Case(
+    lambda x: hb.render_batch(_PIPELINE, None, x[None])[0],
+    ("hdrjax.batch.render_batch", "hdrjax.batch.Pipeline"),
+    jit=False,  # compiled by itself (filter_jit) and takes the batch axis itself
+    grad=False,  # a file pipeline (its operator's gradients: tests/operators)
+    dtypes=("float32",),  # writes float32 files whatever the input (documented)
+    equals=(_reinhard, 1e-6, 1e-7),
+)
 
 
 def _report_numbers(report):
@@ -469,3 +675,181 @@ def float_leaves(out):
 def parameters(module):
     """The inexact-array fields of an equinox Module and the rest."""
     return eqx.partition(module, eqx.is_inexact_array)
+
+
+# --- bad input: accepted forms and out-of-range parameters (test_bad_input.py) ---------------
+_ELEMENTWISE_CASES = [
+    "encode_srgb",
+    "encode_gamma",
+    "gamma_encode",
+    "srgb_encode",
+    "srgb_decode",
+    "quantize",
+    "vision.contrast_scale_ward1994",
+    "vision.ward1994_scale",
+    "vision.fechner",
+] + [n for n in CASES if CASES[n].accepts is ELEMENTWISE]
+_PARAMS: dict[str, tuple[tuple[str, Callable], ...]] = {
+    "luminance": (("weights", lambda x: hdrjax.luminance(x, weights=(1.0, 2.0))),),
+    "desaturate_highlights": (
+        ("threshold", lambda x: hdrjax.desaturate_highlights(x, -1.0)),
+        ("method", lambda x: hdrjax.desaturate_highlights(x, method="median")),
+        ("bins", lambda x: hdrjax.desaturate_highlights(x, bins=0)),
+    ),
+    "DesaturateHighlights": (("bins", lambda x: hd.DesaturateHighlights(bins=0)(x)),),
+    "highlight_threshold": (
+        ("bins", lambda x: hd.highlight_threshold(x, bins=1)),
+        ("weights", lambda x: hd.highlight_threshold(x, weights=(0.3, 0.7))),
+    ),
+    "encode_srgb": (("transfer", lambda x: hd.encode(x, "pq")),),
+    "encode_gamma": (("gamma", lambda x: hd.encode(x, "gamma", gamma=0.0)),),
+    "gamma_encode": (("gamma", lambda x: hd.gamma_encode(x, -2.2)),),
+    "quantize": (("bits", lambda x: hd.quantize(np.clip(x, 0, 1), 12)),),
+    "stats.measure": (
+        ("bins", lambda x: stats.measure(hdrjax.luminance(x), bins=0)),
+        ("method", lambda x: stats.measure(hdrjax.luminance(x), method="median")),
+        ("delta", lambda x: stats.measure(hdrjax.luminance(x), delta=-1e-6)),
+    ),
+    "stats.percentile": (
+        ("q", lambda x: stats.percentile(hdrjax.luminance(x), 150.0)),
+        ("q", lambda x: stats.percentile(hdrjax.luminance(x), jnp.asarray([-1.0, 50.0]))),
+        ("bins", lambda x: stats.percentile(hdrjax.luminance(x), 50.0, bins=0)),
+    ),
+    "vision.contrast_scale": (("model", lambda x: hv.contrast_scale(x, model="ward")),),
+    "vision.contrast": (
+        ("display_max", lambda x: hv.contrast(_cd(x), 10.0, display_max=-1.0)),
+        ("model", lambda x: hv.contrast(_cd(x), 10.0, model="ward")),
+    ),
+    # a view given as a number is its horizontal field of view: the message names hfov
+    "vision.sample_spacing": (("hfov", lambda x: hv.sample_spacing(_cd(x), -0.5)),),
+    "vision.acuity_loss": (
+        ("hfov", lambda x: hv.acuity_loss(_cd(x), 0.0)),
+        ("levels", lambda x: hv.acuity_loss(_cd(x), 30.0, levels=-1)),
+    ),
+    "vision.glare": (
+        ("hfov", lambda x: hv.glare(_cd(x), -30.0)),
+        ("radius_deg", lambda x: hv.glare(_cd(x), 30.0, radius_deg=-1.0)),
+        ("variant", lambda x: hv.glare(_cd(x), 30.0, variant="daylight")),
+    ),
+    "vision.veil": (("hfov", lambda x: hv.veil(_cd(x), -30.0)),),
+    "vision.perceptual_reproduction": (
+        ("display_max", lambda x: hv.perceptual_reproduction(_cd(x), display_max=-1.0)),
+        ("gamma", lambda x: hv.perceptual_reproduction(_cd(x), gamma=0.0)),
+    ),
+    "vision.Budak2005": (("display_max", lambda x: hv.Budak2005(display_max=0.0)(_cd(x))),),
+    "vision.analyze": (("scale", lambda x: hv.analyze(np.asarray(x), scale=-1.0)),),
+    "lights.display_image": (("method", lambda x: hl.display_image(np.asarray(x), "nope")),),
+    "lights.cubemap_equirect": (("height", lambda x: hl.cubemap_equirect(_cube(x), height=0)),),
+    "lights.detect": (
+        ("width", lambda x: hl.detect(x, width=0)),
+        ("max_lights", lambda x: hl.detect(x, width=16, max_lights=0)),
+    ),
+    "lights.detect_image": (("width", lambda x: hl.detect_image(x, width=-16)),),
+    "lights.detect_cubemap": (
+        ("height", lambda x: hl.detect_cubemap(_cube(x), height=0, width=16)),
+    ),
+    "lights.median_cut": (
+        ("n_lights", lambda x: hl.median_cut(x, n_lights=0, width=16)),
+        ("width", lambda x: hl.median_cut(x, n_lights=4, width=0)),
+    ),
+    "panorama.equirect_to_cubemap": (("size", lambda x: hp.equirect_to_cubemap(x, 0)),),
+    "panorama.cubemap_to_equirect": (("height", lambda x: hp.cubemap_to_equirect(_cube(x), 0)),),
+    "panorama.equirect_to_fisheye": (
+        ("size", lambda x: hp.equirect_to_fisheye(x, -8)),
+        ("fov_deg", lambda x: hp.equirect_to_fisheye(x, 8, fov_deg=0.0)),
+    ),
+    "panorama.fisheye_to_equirect": (
+        ("height", lambda x: hp.fisheye_to_equirect(x, 0)),
+        ("fov_deg", lambda x: hp.fisheye_to_equirect(x, 8, fov_deg=-180.0)),
+    ),
+    "panorama.polar_to_cartesian": (
+        ("size", lambda x: hp.polar_to_cartesian(x, 0)),
+        ("theta_max_deg", lambda x: hp.polar_to_cartesian(x, 8, theta_max_deg=0.0)),
+    ),
+    "panorama.sample_equirect": (("d", lambda x: hp.sample_equirect(x, jnp.ones((4, 2)))),),
+    "estimate.log_average": (("delta", lambda x: hdrjax.estimate.log_average(x, delta=-1.0)),),
+    "estimate.jgt_white": (("key", lambda x: hdrjax.estimate.jgt_white(x, key=-0.18)),),
+    "estimate.jgt_key": (("bins", lambda x: hdrjax.estimate.jgt_key(x, bins=-1)),),
+    "estimate.adaptation_luminance": (
+        ("bins", lambda x: hdrjax.estimate.adaptation_luminance(x, bins=0)),
+    ),
+    "estimate.desaturation_threshold": (
+        ("method", lambda x: hdrjax.estimate.desaturation_threshold(x, method="median")),
+    ),
+    "targets.Percentiles": (
+        ("q", lambda x: ht.Percentiles([10.0, 50.0], [0.5]).residuals(x)),
+        ("q", lambda x: ht.Percentiles([50.0, 150.0], [0.5, 0.9]).residuals(x)),
+    ),
+    "targets.ClippedFraction": (
+        ("value", lambda x: ht.ClippedFraction(1.5).residuals(x)),
+        ("softness", lambda x: ht.ClippedFraction(0.01, softness=0.0).residuals(x)),
+    ),
+    "targets.MeanLuminance": (("value", lambda x: ht.MeanLuminance(-0.2).residuals(x)),),
+    "targets.Reference": (("space", lambda x: ht.Reference(x, space="rgb").residuals(x)),),
+}
+for _n in CASES:
+    if _n.startswith("filters."):
+        f = hf.mean_filter if "mean" in _n else hf.median_filter
+        _PARAMS[_n] = (
+            ("size", lambda x, f=f: f(x, -1)),
+            ("size", lambda x, f=f: f(x, 4)),
+            ("mode", lambda x, f=f: f(x, 3, mode="constant")),
+        )
+        if "median" in _n:
+            _PARAMS[_n] += (("criterion", lambda x: hf.median_filter(x, 3, criterion="rank")),)
+    elif _n.startswith("vision.HumanVision["):
+        _PARAMS[_n] = (
+            ("hfov", lambda x: hv.HumanVision.build(x.shape, -30.0, ("glare",))),
+            ("effect", lambda x: hv.HumanVision.build(x.shape, 30.0, ("glow",))),
+        )
+    elif _n.startswith("vision.simulate["):
+        _PARAMS[_n] = (
+            ("scale", lambda x: hv.simulate(np.asarray(x), 30.0, {"glare"}, scale=-1.0)),
+        )
+
+_ACCEPTS: dict[str, Mapping[str, tuple[str, Callable]]] = {
+    **{n: ELEMENTWISE for n in _ELEMENTWISE_CASES},
+    **{n: RESAMPLE for n in CASES if n.startswith("panorama.")},
+}
+for _n in CASES:
+    if _n in ("filters.mean_filter[nearest]", "filters.median_filter[channels,nearest]"):
+        _ACCEPTS[_n] = PER_CHANNEL
+    elif _n.startswith("filters.mean_filter"):
+        _ACCEPTS[_n] = PER_CHANNEL_SAME
+    elif _n == "filters.median_filter[luminance,nearest]":
+        _ACCEPTS[_n] = {"channels1": ("one channel is its own luminance", grey)}
+    elif _n.startswith("filters.median_filter[luminance"):
+        _ACCEPTS[_n] = {
+            "channels1": ("one channel is its own luminance (values: nearest)", SAME_PATH)
+        }
+    elif _n.startswith("filters.median_filter[vector"):
+        _ACCEPTS[_n] = {
+            "channels1": ("the vector median of one channel is its median", grey),
+            "channels4": (
+                "the vector median takes any channel count",
+                lambda fn, good, kind: [vector_median_nearest(BAD_INPUTS[kind](good))],
+            ),
+        }
+for _n in CASES:
+    if _n.startswith("tile.apply["):
+        _step = TILE_STEPS[_n[len("tile.apply[") : -1]][0]
+        _PARAMS[_n] = (("tile", lambda x, st=_step: htile.apply(st(), np.asarray(x), tile=0)),)
+_PARAMS["tile.statistics"] = (("tile", lambda x: htile.statistics(np.asarray(x), tile=-4)),)
+_ACCEPTS["tile.apply[Mean]"] = PER_CHANNEL
+_ACCEPTS["tile.apply[Neighbourhood]"] = PER_CHANNEL
+_ACCEPTS["tile.apply[Median]"] = {"channels1": ("one channel is its own luminance", grey)}
+_ACCEPTS["tile.statistics"] = {
+    k: (
+        "statistics of a luminance image (H, W) or (H, W, 1), as documented",
+        lambda fn, good, kind: _float_leaves(
+            _measure_plane(np.reshape(BAD_INPUTS[kind](good), good.shape[:2]))
+        ),
+    )
+    for k in ("rank2", "channels1")
+}
+_unknown = sorted(set(_PARAMS) - set(CASES)) + sorted(set(_ACCEPTS) - set(CASES))
+assert not _unknown, f"bad-input entries for cases that do not exist: {_unknown}"
+for _n, _p in _PARAMS.items():
+    CASES[_n] = dataclasses.replace(CASES[_n], params=_p)
+for _n, _a in _ACCEPTS.items():
+    CASES[_n] = dataclasses.replace(CASES[_n], accepts=_a)

@@ -18,16 +18,7 @@ NAMES = sorted(CASES)
 
 # Failures found by this suite and not fixed yet (notes/conformance.md), as strict xfails:
 # the test turns red when one is fixed, so the entry is removed with the fix.
-KNOWN = {
-    # d/dX of (Y + Z)/X is -(Y + Z)/X², which overflows for X ~ 1e±30 cd/m² (1e±32 here):
-    # scotopic luminance (Radiance cielum) and the effects built on it
-    ("grad", "vision.scotopic_luminance"): "gradient of (Y+Z)/X overflows at 1e±30",
-    ("grad", "vision.blue_shift"): "gradient of (Y+Z)/X overflows at 1e±30",
-    ("grad", "vision.colour_loss"): "gradient of (Y+Z)/X overflows at 1e±30",
-    ("grad", "vision.HumanVision[blue_shift]"): "gradient of (Y+Z)/X overflows at 1e±30",
-    ("grad", "vision.HumanVision[colour_loss]"): "gradient of (Y+Z)/X overflows at 1e±30",
-    ("grad", "vision.spencer1995_psf"): "PSF power terms overflow their gradient at 1e32°",
-}
+KNOWN: dict[tuple[str, str], str] = {}
 
 
 def _known(kind, names):

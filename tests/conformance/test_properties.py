@@ -37,11 +37,7 @@ AUTO_EXPOSED = [
     "reinhard2002_local",
     "schlick1994",
 ]
-KNOWN_SCALE_DEPENDENT = {
-    # hdritools' white-point guard compares the range in zones with log2 of the trimmed
-    # log-average *in image units* (_reinhard2002.py, `guard`): see notes/conformance.md
-    "reinhard2002": "white-point guard is not scale invariant (reported to the lead)",
-}
+KNOWN_SCALE_DEPENDENT: dict[str, str] = {}
 
 
 @pytest.mark.parametrize(

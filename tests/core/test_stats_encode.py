@@ -118,3 +118,70 @@ def test_primary_matrix_equals_colour_science(chroma):
     c = np.asarray(chroma)
     ref = colour.normalised_primary_matrix(c[:6].reshape(3, 2), c[6:])
     np.testing.assert_allclose(normalised_primary_matrix(c), ref, rtol=1e-12, atol=1e-15)
+
+
+def _hard_image(shape, seed, dirty):
+    L = np.random.default_rng(seed).lognormal(0, 2, shape)
+    if dirty:  # every masked case: NaN, ±Inf, negative, zero
+        L.flat[[3, 50, 777, 4100, 9000, 10001]] = [np.nan, np.inf, -np.inf, -0.5, 0.0, 0.0]
+    return L
+
+
+@pytest.mark.parametrize("dirty", [False, True])
+def test_blocked_passes_against_numpy(monkeypatch, dirty):
+    # small blocks, so a 150×201 image spans many blocks and a ragged tail (the code paths
+    # a 4096² image takes); NumPy float64 is the reference
+    import hdrjax._stats as S
+
+    monkeypatch.setattr(S, "BLOCK", 4096)
+    L = _hard_image((150, 201), 5, dirty).astype(np.float32)
+    st = jax.jit(measure)(L)
+    f = L[np.isfinite(L)].astype(np.float64)
+    pos = f[f > 0]
+    assert int(st.n_nonfinite) == L.size - f.size and int(st.n_positive) == pos.size
+    assert float(st.min) == f.min() and float(st.max) == f.max()
+    assert float(st.min_positive) == pos.min()
+    lavg = np.exp(np.mean(np.log(1e-6 + np.maximum(f, 0))))
+    np.testing.assert_allclose(float(st.log_average), lavg, rtol=1e-5)
+    bound = float(st.rel_error_bound)
+    np.testing.assert_allclose(bound, np.expm1(np.log(pos.max() / pos.min()) / 8192), rtol=1e-4)
+    for q, got in ((1, st.p01), (99, st.p99)):
+        ref = np.percentile(pos, q, method="lower")  # the order statistic x_(floor(q(n-1)))
+        assert abs(float(got) / ref - 1) <= bound + 1e-6, (q, float(got), ref)
+    kept = pos[pos <= float(st.p99)]
+    np.testing.assert_allclose(
+        float(st.log_average_trimmed), np.exp(np.mean(np.log(kept))), rtol=1e-5
+    )
+    vals, b = jax.jit(lambda x: percentile(x, np.array([10.0, 90.0])))(L)
+    for q, got in zip([10, 90], vals, strict=True):
+        assert abs(float(got) / np.percentile(pos, q, method="lower") - 1) <= float(b) + 1e-6
+
+
+@pytest.mark.parametrize("dirty", [False, True])
+def test_measure_gradients_follow_the_formulas(x64, dirty):
+    # d/dL of each statistic, by hand: extrema pick their pixel; log-averages
+    # exp(mean ln(.)) spread over the pixels they average
+    L = _hard_image((90, 120), 6, dirty)
+    st = measure(L)
+    ok = np.isfinite(L)
+    f = np.where(ok, L, 0.0)
+    n = ok.sum()
+
+    def grad(name):
+        return np.asarray(jax.grad(lambda x: getattr(measure(x), name))(L))
+
+    for name, value, mask in (
+        ("min", np.min(L[ok]), ok),
+        ("max", np.max(L[ok]), ok),
+        ("min_positive", np.min(L[ok & (f > 0)]), ok & (f > 0)),
+    ):
+        expect = np.where(mask & (f == value), 1.0, 0.0)
+        np.testing.assert_allclose(grad(name), expect / expect.sum(), atol=1e-12, err_msg=name)
+    lavg = float(st.log_average)
+    slope = np.where(f > 0, 1.0, np.where(f == 0, 0.5, 0.0))  # JAX's max(x, 0) at 0: 1/2
+    expect = np.where(ok, lavg / n * slope / (1e-6 + np.maximum(f, 0)), 0.0)
+    np.testing.assert_allclose(grad("log_average"), expect, rtol=1e-9, atol=1e-15)
+    kept = ok & (f > 0) & (f <= float(st.p99))
+    trimmed = float(st.log_average_trimmed)
+    expect = np.where(kept, trimmed / kept.sum() / np.where(kept, f, 1.0), 0.0)
+    np.testing.assert_allclose(grad("log_average_trimmed"), expect, rtol=1e-9, atol=1e-15)

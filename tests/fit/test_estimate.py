@@ -40,7 +40,8 @@ def _finite_L(rgb):
 
 
 def jgt_numpy(rgb, delta=1e-6):
-    """JGT 2002 Eqs. 4–5 (with hdritools' guard) and Reinhard 2002 Eq. 1, float64 NumPy."""
+    """JGT 2002 Eqs. 4–5 (with hdritools' guard in scaled units: Eq. 5's white against the
+    trimmed log-average times ``key / lbar``) and Reinhard 2002 Eq. 1, float64 NumPy."""
     L = _finite_L(rgb)
     pos = L[L > 0]
     l1, l99 = np.percentile(pos, [1, 99])
@@ -48,7 +49,7 @@ def jgt_numpy(rgb, delta=1e-6):
     key = 0.18 * 4 ** ((2 * np.log2(lbar_t) - np.log2(l1) - np.log2(l99)) / np.log2(l99 / l1))
     lbar = np.exp(np.mean(np.log(delta + np.maximum(L, 0))))
     zones = np.log2(pos.max()) - np.log2(pos.min())
-    guard = zones <= np.log2(lbar_t) + 4.415037
+    guard = 1.5 * 2 ** (zones - 5) <= lbar_t * key / lbar  # ⇔ zones ≤ log2(·) + 4.415037
     white = 1.5 * pos.max() * key / lbar if guard else 1.5 * 2 ** (zones - 5)
     return dict(key=key, white=white, lbar=lbar, l1=l1, l99=l99, lbar_t=lbar_t, zones=zones,
                 guard=guard)  # fmt: skip
@@ -92,6 +93,26 @@ def test_jgt_estimates_match_operator_and_numpy(images, name, x64):
 
 def test_guard_branch_is_exercised(images):
     assert jgt_numpy(images["ramp"])["guard"] and not jgt_numpy(images["cornell"])["guard"]
+
+
+@pytest.mark.parametrize("k", [2.0**-20, 1 / 16, 1.0, 2.0**20])
+def test_white_is_scale_invariant(images, k, x64):
+    """The white point of ``k ×`` the ramp is the ramp's: its guard compares Eq. 5's white
+    with the trimmed log-average in scaled units. hdritools' comparison with the
+    log-average in image units switches to Eq. 5 (a white 5× lower) for k ≤ 1/16."""
+    rgb = images["ramp"] * k
+    ref = jgt_numpy(rgb, delta=0.0)  # delta > 0 makes L̄_w itself scale dependent
+    assert ref["guard"]
+    np.testing.assert_allclose(
+        ref["white"], jgt_numpy(images["ramp"], delta=0.0)["white"], rtol=1e-12
+    )
+    if k <= 1 / 16:  # the case that motivates the scaled units
+        assert ref["zones"] > np.log2(ref["lbar_t"]) + 4.415037
+    w = E.jgt_white(rgb, percentile_method="exact", delta=0.0)
+    assert bool(w.statistics["guard"])
+    np.testing.assert_allclose(float(w.value), ref["white"], rtol=RTOL64)
+    op = _measure(Reinhard2002(delta=0.0), rgb)  # histogram percentiles: key moves slightly
+    np.testing.assert_allclose(float(op.L_white), ref["white"], rtol=1e-3)
 
 
 def test_white_with_given_key_and_log_average_and_delta(images, x64):

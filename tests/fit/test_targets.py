@@ -47,6 +47,29 @@ def test_percentiles_match_numpy_and_are_differentiable(x64):
         ht.Percentiles((1, 99), (0.5,))
 
 
+def test_percentiles_by_selection_match_numpy_even_after_q_changes(x64):
+    # 40 × 40 pixels: the percentiles come from jax.lax.top_k of the 42 smallest/largest (not a
+    # sort); zero pixels are excluded, as numpy sees only the positive ones below
+    d = _display(7, (40, 40, 3))
+    d[:5] = 0.0
+    L = _lum(d)
+    t = ht.Percentiles((1, 2.5, 97.5, 99), (0.0,) * 4)
+    assert t.select == (2.5, 97.5)
+    got = eqx.filter_jit(type(t).statistics)(t, jnp.asarray(d))
+    np.testing.assert_allclose(got, np.percentile(L[L > 0], [1, 2.5, 97.5, 99]), rtol=RTOL64)
+    # P99 of the display s·d/2 (≤ 0.6: nothing clips) is s·P99(lum(d/2)): derivative at s = 1
+    half = _lum(d * 0.5)
+    g = jax.grad(lambda s: t.statistics(s * jnp.asarray(d * 0.5))[3])(1.0)
+    np.testing.assert_allclose(g, np.percentile(half[half > 0], 99), rtol=1e-9)
+    # a q moved outside the selection after construction falls back to the sort
+    moved = eqx.tree_at(lambda t: t.q, t, jnp.asarray([1.0, 30.0, 60.0, 99.0]))
+    np.testing.assert_allclose(
+        eqx.filter_jit(type(t).statistics)(moved, jnp.asarray(d)),
+        np.percentile(L[L > 0], [1, 30, 60, 99]),
+        rtol=RTOL64,
+    )
+
+
 def test_clipped_fraction_tends_to_the_hard_count(x64):
     d = _display(2)
     hard = np.mean(d.max(-1) >= 1.0)

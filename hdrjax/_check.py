@@ -1,0 +1,203 @@
+"""Argument validation shared by the public functions: shapes, dtypes and parameter ranges.
+
+Every check reads only what is static under ``jax.jit`` — an array's shape and dtype, and
+Python numbers — so it runs once at trace time and costs nothing in the compiled function.
+A traced *value* (a parameter passed as a jnp array inside ``jit``) cannot be checked that
+way and is let through; concrete values (Python numbers, NumPy arrays, eager JAX arrays)
+are checked.
+
+Each failure is a ``ValueError`` whose message starts with the argument's name and says the
+expected form, on one line (the command line prints it as ``hdrjax CMD: error: ...``)::
+
+    rgb: expected shape (..., H, W, 3), got shape (4, 5)
+    rgb: expected a real-valued array (floating point; integers and bools are promoted to
+    float), got dtype complex64
+    size: expected an integer >= 1, got -3
+
+Policy (the conformance suite, ``tests/conformance/test_bad_input.py``, holds every public
+function to it):
+
+- **dtype**: floating point; integer and bool arrays are promoted to JAX's default float
+  (as NumPy ufuncs do), float16/bfloat16 are computed in it; complex, string and object
+  arrays are rejected — a complex image is a mistake (an FFT result passed on), and
+  silently dropping its imaginary part hides it.
+- **shape**: images are channels last; a function states its form, e.g. ``(..., H, W, 3)``.
+"""
+
+import numbers
+from collections.abc import Sequence
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+
+def dtype_of(x: Any) -> np.dtype:
+    """The dtype ``jnp.asarray(x)`` would have, without converting ``x``."""
+    dt = getattr(x, "dtype", None)
+    if dt is not None:
+        return np.dtype(dt)
+    return np.asarray(x).dtype
+
+
+def real(x: Any, name: str) -> None:
+    """Raise unless ``x`` is real-valued: floating point, integer or bool (promoted)."""
+    dt = dtype_of(x)
+    if not (
+        jnp.issubdtype(dt, jnp.floating)
+        or jnp.issubdtype(dt, jnp.integer)
+        or jnp.issubdtype(dt, jnp.bool_)
+    ):
+        raise ValueError(
+            f"{name}: expected a real-valued array (floating point; integers and bools are"
+            f" promoted to float), got dtype {dt}"
+        )
+
+
+def form(channels: int | None = 3, ndim: int | None = None, min_ndim: int = 3) -> str:
+    """The expected shape as the messages write it, e.g. ``(..., H, W, 3)``."""
+    c = "C" if channels is None else str(channels)
+    axes = ["B", "H", "W", c][-min(ndim or min_ndim, 4) :]
+    lead = "" if ndim is not None else "..., "
+    return f"({lead}{', '.join(axes)})"
+
+
+def shape(
+    x: Any,
+    name: str,
+    *,
+    channels: int | None = 3,
+    ndim: int | None = None,
+    min_ndim: int = 3,
+) -> tuple[int, ...]:
+    """Validate an image's shape and dtype without converting it; return its shape.
+
+    Args:
+        x: the argument (any array-like, or a ``jax.ShapeDtypeStruct``; only its shape and
+            dtype are read).
+        name: the argument's name, for the message.
+        channels: required size of the last axis, ``None`` for any.
+        ndim: exact number of axes (e.g. 3 for one ``(H, W, C)`` image); ``None`` allows
+            leading batch axes.
+        min_ndim: least number of axes when ``ndim`` is ``None``.
+    """
+    s = tuple(int(v) for v in getattr(x, "shape", None) or np.shape(x))
+    bad_rank = len(s) != ndim if ndim is not None else len(s) < min_ndim
+    if bad_rank or (channels is not None and (not s or s[-1] != channels)):
+        raise ValueError(f"{name}: expected shape {form(channels, ndim, min_ndim)}, got shape {s}")
+    real(x, name)
+    return s
+
+
+def cube(
+    faces: Any, name: str = "faces", *, channels: int | None = 3, batch: bool = True
+) -> tuple[int, ...]:
+    """Validate ``(..., 6, S, S, C)`` cube faces (``(6, S, S, C)`` unless ``batch``), shape
+    and dtype; return the shape."""
+    s = tuple(int(v) for v in np.shape(faces))
+    ok = (len(s) >= 4 if batch else len(s) == 4) and s[-4] == 6 and s[-3] == s[-2]
+    if not ok or (channels is not None and s[-1] != channels):
+        c = "C" if channels is None else str(channels)
+        lead = "..., " if batch else ""
+        raise ValueError(
+            f"{name}: expected cube faces of shape ({lead}6, S, S, {c}), got shape {s}"
+        )
+    real(faces, name)
+    return s
+
+
+def image_size(size: Any, name: str = "shape") -> tuple[int, int]:
+    """``(H, W)`` of an image shape given as ``(H, W)`` or ``(H, W, 3)``."""
+    try:
+        s = tuple(int(v) for v in size)
+    except TypeError:
+        s = ()
+    if len(s) not in (2, 3) or (len(s) == 3 and s[2] != 3) or min(s[:2], default=0) < 1:
+        raise ValueError(f"{name}: expected an image size (H, W) or (H, W, 3), got {size!r}")
+    return s[0], s[1]
+
+
+def _concrete(value: Any) -> np.ndarray | None:
+    """``value`` as a NumPy array, or ``None`` when it is traced (not checkable)."""
+    if isinstance(value, jax.core.Tracer):
+        return None
+    return np.asarray(value)
+
+
+def positive(
+    value: Any, name: str, *, integer: bool = False, zero: bool = False, finite: bool = True
+) -> Any:
+    """Raise unless ``value`` is a positive (or, with ``zero``, non-negative) number, finite
+    unless ``finite=False`` (NaN never passes), an integer when ``integer``; every element
+    of an array. ``None`` (a default meaning "estimate it") passes. Returns ``value``."""
+    if value is None:
+        return value
+    what = ("a non-negative" if zero else "a positive") + (" integer" if integer else " number")
+    what += "" if finite else " (inf allowed)"
+    if integer and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
+        raise ValueError(f"{name}: expected {what}, got {value!r}")
+    v = _concrete(value)
+    if v is None:
+        return value
+    if not np.issubdtype(v.dtype, np.number) or np.iscomplexobj(v):
+        raise ValueError(f"{name}: expected {what}, got {value!r}")
+    ok = v >= 0 if zero else v > 0
+    if not np.all(ok & (np.isfinite(v) | (not finite))):
+        raise ValueError(f"{name}: expected {what}, got {value!r}")
+    return value
+
+
+def integer(value: Any, name: str, minimum: int = 1) -> int:
+    """Raise unless ``value`` is an integer (not a bool) ``>= minimum``; return it as int."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def in_range(value: Any, name: str, lo: float, hi: float) -> Any:
+    """Raise unless every element of ``value`` lies in ``[lo, hi]`` (``None`` passes)."""
+    v = None if value is None else _concrete(value)
+    if v is None:
+        return value
+    if (
+        not np.issubdtype(v.dtype, np.number)
+        or np.iscomplexobj(v)
+        or not np.all((v >= lo) & (v <= hi))
+    ):
+        raise ValueError(f"{name}: expected numbers in [{lo:g}, {hi:g}], got {value!r}")
+    return value
+
+
+def weights(value: Any, name: str = "weights") -> Any:
+    """Raise unless ``value`` is ``None`` or three finite numbers (RGB luminance weights)."""
+    if value is None:
+        return value
+    try:
+        w = np.asarray(value, np.float64)
+    except (TypeError, ValueError):
+        w = np.zeros(0)
+    if w.shape != (3,) or not np.all(np.isfinite(w)):
+        raise ValueError(f"{name}: expected three finite numbers (w_r, w_g, w_b), got {value!r}")
+    return value
+
+
+def one_of(value: Any, name: str, options: Sequence[str]) -> Any:
+    """Raise unless ``value`` is one of ``options``. Returns ``value``."""
+    if value not in options:
+        raise ValueError(f"{name}: expected one of {', '.join(map(repr, options))}, got {value!r}")
+    return value
+
+
+__all__ = [
+    "cube",
+    "dtype_of",
+    "form",
+    "image_size",
+    "in_range",
+    "one_of",
+    "positive",
+    "real",
+    "shape",
+    "weights",
+]
