@@ -495,7 +495,7 @@ def run(
         def report(msg: str) -> None:
             from tqdm.auto import tqdm
 
-            tqdm.write(f"hdrjax batch: {msg}", file=sys.stderr)
+            tqdm.write(f"hdrjax batch: error: {msg}", file=sys.stderr)
 
     sequence = parameters != "per-frame" and bool(pipeline.operator.unset())
     pooled = parameters == "same"

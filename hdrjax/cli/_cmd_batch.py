@@ -192,9 +192,10 @@ def run(args: argparse.Namespace) -> int:
     except OSError as e:
         raise DataError(str(e)) from None
     print(f"hdrjax batch: {summary}")
-    if summary.failed:
+    if len(summary.failed) > 1:
+        # each failure was reported as it happened (one line each, between progress
+        # updates); a long run's failures are listed together once more at the end
         print(f"failed ({len(summary.failed)}):", file=sys.stderr)
         for msg in summary.failed.values():
             print(f"  {msg}", file=sys.stderr)
-        return 1
-    return 0
+    return 1 if summary.failed else 0

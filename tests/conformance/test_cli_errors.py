@@ -54,9 +54,9 @@ def _argv(cmd, src, out_dir):
     return [cmd, str(src), *_fill(ARGV[cmd][0], out_dir)]
 
 
-# batch reads many frames: it reports each failed frame on its own line, then a summary
-# (its design, tests/batch/); still no traceback and a non-zero status
-MANY_LINES = {"batch"}
+# commands whose bad input may take more than one line (none: `hdrjax batch` reports each
+# failed frame on its own line, and lists them again only when several failed)
+MANY_LINES: set[str] = set()
 
 
 def _one_line_error(capsys, cmd, code, *needles):
