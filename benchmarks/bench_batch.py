@@ -103,6 +103,20 @@ def _timed(fn, repeats: int) -> dict:
     return t
 
 
+def _rate(case: str, impl: str, t: dict, n: int, **extra) -> dict:
+    """A record of ``n`` frames in ``t``: frames/s and process CPU time per frame."""
+    return H.record(
+        BENCH,
+        case,
+        impl,
+        timing=t,
+        frames=n,
+        frames_per_s=n / t["median_s"],
+        cpu_ms_per_frame=1e3 * t["cpu_s"] / n,
+        **extra,
+    )
+
+
 def _fast_png(recs, paths, warm, out, n, reps) -> None:
     """The same three ways at PNG zlib level 1 (OpenCV's default; hdrjax ``compression=1``)."""
     case = f"reinhard2002 {n} frames 1024x512 hdr->png (zlib level 1)"
@@ -118,18 +132,7 @@ def _fast_png(recs, paths, warm, out, n, reps) -> None:
         ("one-at-a-time loop", lambda: hdrjax_loop(paths, _fresh(out), 1)),
         ("numpy+opencv", lambda: peer_numpy_opencv(paths, _fresh(out), 1)),
     ):
-        t = _timed(fn, reps)
-        recs.append(
-            H.record(
-                BENCH,
-                case,
-                impl,
-                timing=t,
-                frames=n,
-                frames_per_s=n / t["median_s"],
-                cpu_ms_per_frame=1e3 * t["cpu_s"] / n,
-            )
-        )
+        recs.append(_rate(case, impl, _timed(fn, reps), n))
 
 
 def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = False) -> list[dict]:
@@ -150,19 +153,7 @@ def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = Fal
             assert len(s.done) == n, s
 
         batch.run(warm, pipe, _fresh(out), batch_size=BATCH, progress=False, resume=False)
-        t = _timed(batched, reps)
-        recs.append(
-            H.record(
-                BENCH,
-                case,
-                "hdrjax",
-                timing=t,
-                frames=n,
-                frames_per_s=n / t["median_s"],
-                batch_size=BATCH,
-                cpu_ms_per_frame=1e3 * t["cpu_s"] / n,
-            )
-        )
+        recs.append(_rate(case, "hdrjax", _timed(batched, reps), n, batch_size=BATCH))
 
         # the same batches vectorised across frames (vmap) instead of lax.map
         pipe_vmap = batch.Pipeline("reinhard2002", vectorize="vmap")
@@ -191,34 +182,12 @@ def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = Fal
             hdrjax_loop(paths, _fresh(out))
 
         hdrjax_loop(warm[:2], _fresh(out))
-        t = _timed(loop, reps)
-        recs.append(
-            H.record(
-                BENCH,
-                case,
-                "one-at-a-time loop",
-                timing=t,
-                frames=n,
-                frames_per_s=n / t["median_s"],
-                cpu_ms_per_frame=1e3 * t["cpu_s"] / n,
-            )
-        )
+        recs.append(_rate(case, "one-at-a-time loop", _timed(loop, reps), n))
 
         def peer():
             peer_numpy_opencv(paths, _fresh(out))
 
-        t = _timed(peer, reps)
-        recs.append(
-            H.record(
-                BENCH,
-                case,
-                "numpy+opencv",
-                timing=t,
-                frames=n,
-                frames_per_s=n / t["median_s"],
-                cpu_ms_per_frame=1e3 * t["cpu_s"] / n,
-            )
-        )
+        recs.append(_rate(case, "numpy+opencv", _timed(peer, reps), n))
         _fast_png(recs, paths, warm, out, n, reps)
 
         if not skip_dask:
