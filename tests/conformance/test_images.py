@@ -16,20 +16,6 @@ from ._table import CASES, float_leaves, parameters
 
 NAMES = sorted(CASES)
 
-# Failures found by this suite and not fixed yet (notes/conformance.md), as strict xfails:
-# the test turns red when one is fixed, so the entry is removed with the fix.
-KNOWN: dict[tuple[str, str], str] = {}
-
-
-def _known(kind, names):
-    return [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=KNOWN[kind, n]))
-        if (kind, n) in KNOWN
-        else n
-        for n in names
-    ]
-
-
 TRACED = [n for n in NAMES if CASES[n].jit]
 DIFFERENTIABLE = [n for n in TRACED if CASES[n].grad]
 MODULES = [n for n in DIFFERENTIABLE if CASES[n].module is not None]
@@ -162,7 +148,7 @@ def _loss(case):
     return loss
 
 
-@pytest.mark.parametrize("name", _known("grad", DIFFERENTIABLE))
+@pytest.mark.parametrize("name", DIFFERENTIABLE)
 def test_image_gradients_are_finite(name):
     """d(sum of finite outputs)/d(image) is finite at every finite input pixel, for every
     family, bad pixels included (their own gradient may be anything)."""

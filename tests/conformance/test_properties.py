@@ -37,18 +37,9 @@ AUTO_EXPOSED = [
     "reinhard2002_local",
     "schlick1994",
 ]
-KNOWN_SCALE_DEPENDENT: dict[str, str] = {}
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=KNOWN_SCALE_DEPENDENT[n]))
-        if n in KNOWN_SCALE_DEPENDENT
-        else n
-        for n in AUTO_EXPOSED
-    ],
-)
+@pytest.mark.parametrize("name", AUTO_EXPOSED)
 def test_auto_exposed_operators_are_scale_invariant(name):
     assert name in hdrjax.operator_names()
     kw = (
