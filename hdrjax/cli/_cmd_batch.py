@@ -8,6 +8,7 @@ errors.
 import argparse
 import sys
 
+from ..io._display import DEFAULT_COMPRESSION
 from ._cmd_tonemap import build_operator
 from ._common import DataError, UsageError, positive_float
 
@@ -90,9 +91,9 @@ def register(subparsers) -> None:
         "--compression",
         type=int,
         choices=range(10),
-        default=6,
+        default=DEFAULT_COMPRESSION,
         metavar="0-9",
-        help="PNG/TIFF zlib level (default 6; 1 is ~3x faster, ~10%% larger)",
+        help="PNG/TIFF zlib level (default 1, OpenCV's; 6 is ~8x slower for ~1%% smaller PNGs)",
     )
     p.add_argument(
         "--transfer", choices=("srgb", "gamma", "linear"), default="srgb", help="display encoding"

@@ -19,4 +19,8 @@ from ._api import (
     write as write,
 )
 from ._atomic import atomic_path as atomic_path
-from ._display import DISPLAY_FORMATS as DISPLAY_FORMATS, write_display as write_display
+from ._display import (
+    DEFAULT_COMPRESSION as DEFAULT_COMPRESSION,
+    DISPLAY_FORMATS as DISPLAY_FORMATS,
+    write_display as write_display,
+)

@@ -306,7 +306,7 @@ def test_rgb_raises_for_spectral():
 
 
 def _decode_png(data):
-    """Minimal PNG reader for the files hdrjax writes (filter 0, no interlace)."""
+    """Minimal PNG reader for the files hdrjax writes (filter None or Sub, no interlace)."""
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     pos, idat, chunks = 8, b"", {}
     while pos < len(data):
@@ -321,8 +321,13 @@ def _decode_png(data):
     w, h, depth, ctype = struct.unpack(">IIBB", chunks[b"IHDR"][:10])
     c = {0: 1, 2: 3, 6: 4}[ctype]
     raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(h, -1)
-    assert np.all(raw[:, 0] == 0)
-    px = raw[:, 1:].copy().view(">u2" if depth == 16 else np.uint8)
+    assert np.all(raw[:, 0] == raw[0, 0]) and raw[0, 0] in (0, 1), "filter None or Sub"
+    rows = raw[:, 1:].astype(np.int64)
+    if raw[0, 0] == 1:  # Sub: Raw(x) = Sub(x) + Raw(x - bpp) mod 256, per byte position
+        bpp = c * depth // 8
+        for i in range(bpp, rows.shape[1]):
+            rows[:, i] = (rows[:, i] + rows[:, i - bpp]) % 256
+    px = rows.astype(np.uint8).view(">u2" if depth == 16 else np.uint8)
     return px.reshape(h, w, c), chunks
 
 
@@ -346,13 +351,24 @@ def test_write_display_compression_level(tmp_path):
     gx, gy = np.meshgrid(np.linspace(0, 1, 96), np.linspace(0, 1, 64))
     d = np.stack([gx, gy, 0.5 + 0.01 * rng.standard_normal(gx.shape)], axis=2).astype(np.float32)
     sizes, want = {}, np.round(np.clip(d, 0, 1) * 255)
-    for level, flevel in ((0, 0), (1, 0), (6, 2), (9, 3)):
+    for level, flevel in ((0, 0), (1, 0), (2, 0), (6, 2), (9, 3)):
         p = hio.write_display(tmp_path / f"o{level}.png", d, compression=level)
         px, chunks = _decode_png(p.read_bytes())
         np.testing.assert_array_equal(px, want)
         assert chunks[b"IDAT"][1] >> 6 == flevel  # FLEVEL bits of the zlib header
         sizes[level] = len(chunks[b"IDAT"])
+        filt = zlib.decompress(chunks[b"IDAT"])[0]
+        assert filt == (0 if level == 0 else 1)  # None when stored, else Sub
     assert sizes[0] > sizes[1] > sizes[9]
+    # the default: what OpenCV writes (level 1, Sub rows, run-length matching)
+    import cv2  # installed by `make test` (the bench extra)
+
+    code = (want[..., ::-1]).astype(np.uint8)
+    ok, ref = cv2.imencode(".png", code)
+    assert ok
+    p = hio.write_display(tmp_path / "default.png", d)
+    _, chunks = _decode_png(p.read_bytes())
+    assert abs(len(chunks[b"IDAT"]) - len(ref.tobytes())) < 0.05 * len(ref.tobytes())
     pt = hio.write_display(tmp_path / "o.tif", d, compression=1)
     from PIL import Image
 
