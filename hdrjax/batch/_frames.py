@@ -38,7 +38,7 @@ def read_frame(path: str | os.PathLike, *, allow_nan: bool = False) -> tuple[np.
     except (ValueError, OSError, KeyError, IndexError, EOFError) as e:
         msg = str(e) or type(e).__name__
         raise FrameError(msg if os.path.basename(name) in msg else f"{name}: {msg}") from None
-    if not allow_nan:
+    if not allow_nan and np.isnan(rgb.max(initial=-np.inf)):  # max propagates NaN: one fast pass
         n_nan = int(np.count_nonzero(np.isnan(rgb).any(axis=-1)))
         if n_nan:
             raise FrameError(
