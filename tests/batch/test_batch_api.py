@@ -1,8 +1,6 @@
 """hdrjax.batch.run and Pipeline against NumPy/SciPy references of the same formulas."""
 
 import math
-import struct
-import zlib
 
 import numpy as np
 import pytest
@@ -10,6 +8,7 @@ import scipy.ndimage as ndi
 
 from hdrjax import batch, io as hio
 
+from .._png import decode_png
 from ..conftest import DATA
 from ._frames import frame, write_sequence
 
@@ -56,25 +55,10 @@ def jgt_parameters(L):
 
 
 def read_png(p):
-    """Code values of an RGB PNG as hdrjax writes it (one IDAT stream, filter 0 rows),
-    decoded with zlib and the PNG specification's layout."""
-    data = p.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, idat, ihdr = 8, b"", None
-    while pos < len(data):
-        (n,) = struct.unpack(">I", data[pos : pos + 4])
-        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + n]
-        if kind == b"IHDR":
-            ihdr = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-        pos += 12 + n
-    w, h, depth, ctype = ihdr[:4]
-    assert ctype == 2  # truecolour RGB
-    raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(h, -1)
-    assert np.all(raw[:, 0] == 0)  # filter type None on every row
-    dt = ">u2" if depth == 16 else np.uint8
-    return raw[:, 1:].copy().view(dt).reshape(h, w, 3).astype(int)
+    """Code values of an RGB PNG as hdrjax writes it, as ints."""
+    px, chunks = decode_png(p.read_bytes())
+    assert px.shape[2] == 3  # truecolour RGB
+    return px.astype(int)
 
 
 @pytest.fixture(scope="module")

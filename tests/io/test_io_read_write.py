@@ -6,7 +6,6 @@ checked on files the tests write themselves.
 """
 
 import os
-import struct
 import zlib
 
 import numpy as np
@@ -16,6 +15,7 @@ import hdrjax.io as hio
 from hdrjax import luminance_weights
 from hdrjax.layers import LayeredImage, MissingLayerError
 
+from .._png import decode_png
 from ..conftest import DATA, shared_file
 
 RTOL_STATS = 2e-3  # SOURCES.md prints 4 significant digits
@@ -305,39 +305,13 @@ def test_rgb_raises_for_spectral():
 # -- display export ----------------------------------------------------------------------
 
 
-def _decode_png(data):
-    """Minimal PNG reader for the files hdrjax writes (filter None or Sub, no interlace)."""
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, idat, chunks = 8, b"", {}
-    while pos < len(data):
-        (n,) = struct.unpack(">I", data[pos : pos + 4])
-        kind = data[pos + 4 : pos + 8]
-        body = data[pos + 8 : pos + 8 + n]
-        assert struct.unpack(">I", data[pos + 8 + n : pos + 12 + n])[0] == zlib.crc32(kind + body)
-        chunks[kind] = body
-        if kind == b"IDAT":
-            idat += body
-        pos += 12 + n
-    w, h, depth, ctype = struct.unpack(">IIBB", chunks[b"IHDR"][:10])
-    c = {0: 1, 2: 3, 6: 4}[ctype]
-    raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(h, -1)
-    assert np.all(raw[:, 0] == raw[0, 0]) and raw[0, 0] in (0, 1), "filter None or Sub"
-    rows = raw[:, 1:].astype(np.int64)
-    if raw[0, 0] == 1:  # Sub: Raw(x) = Sub(x) + Raw(x - bpp) mod 256, per byte position
-        bpp = c * depth // 8
-        for i in range(bpp, rows.shape[1]):
-            rows[:, i] = (rows[:, i] + rows[:, i - bpp]) % 256
-    px = rows.astype(np.uint8).view(">u2" if depth == 16 else np.uint8)
-    return px.reshape(h, w, c), chunks
-
-
 @pytest.mark.parametrize("bits", [8, 16])
 def test_write_display_png(tmp_path, bits):
     rng = np.random.default_rng(6)
     d = rng.random((7, 11, 3)).astype(np.float32)
     d[0, 0] = [-0.5, 1.5, np.nan]  # clipped / zeroed
     p = hio.write_display(tmp_path / "o.png", d, bits=bits)
-    px, chunks = _decode_png(p.read_bytes())
+    px, chunks = decode_png(p.read_bytes())
     top = (1 << bits) - 1
     want = np.round(np.clip(np.nan_to_num(d), 0, 1) * top).astype(np.uint16)
     np.testing.assert_array_equal(px.astype(np.uint16), want)
@@ -353,7 +327,7 @@ def test_write_display_compression_level(tmp_path):
     sizes, want = {}, np.round(np.clip(d, 0, 1) * 255)
     for level, flevel in ((0, 0), (1, 0), (2, 0), (6, 2), (9, 3)):
         p = hio.write_display(tmp_path / f"o{level}.png", d, compression=level)
-        px, chunks = _decode_png(p.read_bytes())
+        px, chunks = decode_png(p.read_bytes())
         np.testing.assert_array_equal(px, want)
         assert chunks[b"IDAT"][1] >> 6 == flevel  # FLEVEL bits of the zlib header
         sizes[level] = len(chunks[b"IDAT"])
@@ -367,7 +341,7 @@ def test_write_display_compression_level(tmp_path):
     ok, ref = cv2.imencode(".png", code)
     assert ok
     p = hio.write_display(tmp_path / "default.png", d)
-    _, chunks = _decode_png(p.read_bytes())
+    _, chunks = decode_png(p.read_bytes())
     assert abs(len(chunks[b"IDAT"]) - len(ref.tobytes())) < 0.05 * len(ref.tobytes())
     pt = hio.write_display(tmp_path / "o.tif", d, compression=1)
     from PIL import Image
@@ -404,7 +378,7 @@ def test_write_display_jpeg_tiff_and_integers(tmp_path):
     with pytest.raises(ValueError, match="JPEG holds 8 bits"):
         hio.write_display(tmp_path / "o2.jpg", code8, bits=16)
     # uint8 promoted to 16 bits exactly (x 257)
-    px, _ = _decode_png(hio.write_display(tmp_path / "p.png", code8, bits=16).read_bytes())
+    px, _ = decode_png(hio.write_display(tmp_path / "p.png", code8, bits=16).read_bytes())
     np.testing.assert_array_equal(px, code8.astype(np.uint16) * 257)
 
 
