@@ -7,11 +7,15 @@ warm-up call (the NumPy/SciPy peer: 3 runs, 1 in quick mode), and compile time i
 separately (first call minus the median). Figures:
 
 1. daylight scene, ``simulate(effects="auto")`` + tone mapping vs tone mapping alone (the
-   analysis is the only added cost: no effect is selected, none is compiled), and
+   analysis is the only added cost: no effect is selected, none is compiled), in the two
+   ways a user writes it: ``tonemap(simulate(img)[0])`` (two calls) and
+   ``simulate(img, then=op)`` (one call: analysis and tone mapping in one program), and
    ``analyze`` alone against the same tone mapping, all timed round-robin
    (:func:`round_robin`, 11 rounds in quick mode, 15 otherwise);
 2. night scene with lamps, every effect (and each effect alone), vs the same pipeline in
-   NumPy/SciPy (glare by ``scipy.signal.fftconvolve`` with the same kernel);
+   NumPy/SciPy (glare by ``scipy.signal.fftconvolve`` with the same kernel), and
+   ``simulate(auto)`` + tone mapping in the two ways (``then=`` computes a tone mapping of
+   the unmodified image that it discards when effects apply);
 3. glare accuracy vs kernel radius and FFT padding, against the full zero-padded kernel
    (the default), as the accuracy/time curve ``vision glare (kernel radius, FFT grid)``.
 """
@@ -184,6 +188,9 @@ def run(quick: bool = False, *, size: str | None = None, repeat: int | None = No
         if rep_d.selected != ():
             raise AssertionError(f"daylight {label}: auto selected {rep_d.selected}, expected none")
         fns[label] = lambda v=view: tm(hv.simulate(day_j, v, "auto", scale=1.0)[0])
+        fns[label + " then"] = lambda v=view: hv.simulate(
+            day_j, v, "auto", scale=1.0, then="reinhard2002"
+        )[0]
         fns[label + " analyze"] = lambda v=view: hv.analyze(day_j, v, scale=1.0).adaptation_global
     t = round_robin(fns, max(rep, 11 if quick else 15))
     for label, _ in views:
@@ -200,6 +207,20 @@ def run(quick: bool = False, *, size: str | None = None, repeat: int | None = No
                 compiled=True,
                 ratio_to_tonemap=ratio,
                 ratio_of_fastest=ratio_min,
+            ),
+            H.record(BENCH, case, "tonemap(reinhard2002) alone", timing=t["tm"], compiled=True),
+        ]
+        case = f"daylight {res}, {label}: simulate(auto, then=reinhard2002)"
+        t_then = t[label + " then"]
+        out += [
+            H.record(
+                BENCH,
+                case,
+                "hdrjax simulate(auto, then=op)",
+                timing=t_then,
+                compiled=True,
+                ratio_to_tonemap=t_then["median_s"] / t["tm"]["median_s"],
+                ratio_of_fastest=t_then["min_s"] / t["tm"]["min_s"],
             ),
             H.record(BENCH, case, "tonemap(reinhard2002) alone", timing=t["tm"], compiled=True),
         ]
@@ -238,6 +259,10 @@ def run(quick: bool = False, *, size: str | None = None, repeat: int | None = No
             "step": lambda: run_step(step, night_j),
             "simulate": lambda: hv.simulate(night_j, PANORAMA, "all", scale=1.0)[0],
             "analyze": lambda: hv.analyze(night_j, PANORAMA, scale=1.0).adaptation_global,
+            "auto+tm": lambda: tm(hv.simulate(night_j, PANORAMA, "auto", scale=1.0)[0]),
+            "auto then": lambda: hv.simulate(
+                night_j, PANORAMA, "auto", scale=1.0, then="reinhard2002"
+            )[0],
         },
         rep,
     )
@@ -267,6 +292,19 @@ def run(quick: bool = False, *, size: str | None = None, repeat: int | None = No
         ),
         H.record(BENCH, case, "hdrjax simulate('all') incl. analysis", timing=t_sim),
         H.record(BENCH, f"night {res}: analyze alone", "hdrjax analyze", timing=t["analyze"]),
+        H.record(
+            BENCH,
+            f"night {res}: simulate(auto, then=reinhard2002)",
+            "hdrjax simulate(auto, then=op)",
+            timing=t["auto then"],
+            ratio_to_two_calls=t["auto then"]["median_s"] / t["auto+tm"]["median_s"],
+        ),
+        H.record(
+            BENCH,
+            f"night {res}: simulate(auto, then=reinhard2002)",
+            "simulate(auto) + tonemap, two calls",
+            timing=t["auto+tm"],
+        ),
         H.record(BENCH, case, "NumPy/SciPy (same pipeline)", timing=t_np),
     ]
     if not quick:

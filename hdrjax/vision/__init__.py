@@ -9,7 +9,9 @@ cd/m² after ``contrast``; :class:`Budak2005` returns display values in [0, 1]).
 - :func:`simulate` applies the selected effects in pcond's order — acuity loss, veiling
   glare (Spencer et al. 1995 PSF by FFT, or pcond's veil), night colour loss (pcond) or
   blue shift (Jensen et al. 2001), contrast-sensitivity scaling (pcond TVI / Ward 1994) —
-  and returns the image and the report; :class:`HumanVision` is the same step as an
+  and returns the image and the report; ``simulate(..., then=op)`` also tone-maps it (for a
+  scene that calls for no effect, the analysis and a global operator run as one program:
+  about the cost of the tone mapping alone); :class:`HumanVision` is the same step as an
   equinox Module for ``jax.jit``/``vmap``/``grad`` and pipelines.
 - :class:`Budak2005` is seed 002's perceptual colour-contrast reproduction (with documented
   stand-ins for the formulas that are not published; see its module docstring).

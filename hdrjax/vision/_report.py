@@ -31,17 +31,22 @@ the colour and acuity rules fire slightly earlier. The luminance range uses ever
 only the subsample.
 
 Cost: :func:`analyze_rgb` reads the image once, in one XLA program (luminance, foveal block
-sums, extremes, ``Σ ln L`` of the subsample) when every pixel is finite and inside the
-visible range, and a few more masked programs otherwise; the small results are combined in
-float64 NumPy. On a 2048×1024 panorama it costs about a third of a Reinhard 2002 tone
-mapping (benchmarks/bench_vision.py: 14 ms against 48 ms, fastest calls on a shared 2-core
-CPU); the previous version (a histogram scatter over every pixel and four programs) cost
-160 ms, three tone mappings.
+sums, extremes, ``Σ ln L`` of the subsample: :func:`fast_statistics`) when every pixel is
+finite and inside the visible range, and a few more masked programs otherwise; the small
+results are combined in float64 NumPy. The exact 5th percentile costs one more pass in NumPy
+(a sparse grid, then one narrow band of pixels). :func:`hdrjax.vision.simulate` defers it:
+when the whole luminance range lies on one side of every percentile threshold (a daylight
+scene) the rules need no percentile, and it is computed only if the report's
+``luminance_p05`` or ``decisions`` are read (:func:`_selected_by_range`). With ``then=`` the
+statistics are computed in the tone-mapping operator's own program, on its luminance
+(:func:`hdrjax.vision._simulate._analyze_and_tonemap`), so a daylight scene costs about one
+tone mapping.
 """
 
 import dataclasses
 import functools
 import math
+from collections.abc import Callable
 from typing import Any
 
 import jax
@@ -97,21 +102,28 @@ class SceneReport:
         adaptation_centre: foveal (~1°) adaptation luminance at the image centre.
         adaptation_foveal: the foveal image, ``(fy, fx)`` block means (NumPy).
         luminance_p05: 5th-percentile pixel luminance (NaN when no pixel is in range),
-            equal to ``np.percentile`` of the subsample's luminances.
+            equal to ``np.percentile`` of the subsample's luminances (see *Deferred p05*).
         p05_rel_error: bound on its relative error: 0, the percentile is exact (the field
             stays for reports that held a histogram estimate).
         luminance_min, luminance_max: extreme samples inside (1e-7, 1e5) cd/m².
         dynamic_range: ``ln(luminance_max/luminance_min)`` (pcond's histogram range).
         n_pixels: number of pixels; n_nonfinite: pixels whose luminance is NaN or ±Inf.
         glare_variant: Spencer PSF variant for the global adaptation.
+        selected: names of the effects that apply, in application order.
         decisions: one :class:`Decision` per effect, in application order.
+
+    Deferred p05: :func:`hdrjax.vision.simulate` decides the percentile rules from the
+    luminance range alone when the whole range lies on one side of every threshold (a
+    daylight scene: its darkest pixel is above 5.62 cd/m²), and finds the exact
+    ``luminance_p05`` (and the :class:`Decision` texts that quote it) only when one of them
+    is first read; until then the report holds the image's luminance (``H×W`` floats). The
+    values are the same as :func:`analyze`'s, which computes them at once.
     """
 
     view: ResolvedView
     adaptation_global: float
     adaptation_centre: float
     adaptation_foveal: np.ndarray
-    luminance_p05: float
     p05_rel_error: float
     luminance_min: float
     luminance_max: float
@@ -119,17 +131,39 @@ class SceneReport:
     n_pixels: int
     n_nonfinite: int
     glare_variant: str
-    decisions: dict[str, Decision]
+    selected: tuple[str, ...]
+    p05_source: "float | Callable[[], float]" = dataclasses.field(repr=False, compare=False)
+    """The 5th percentile, or the function that computes it on first use (internal)."""
 
-    @property
-    def selected(self) -> tuple[str, ...]:
-        """Names of the effects that apply, in application order."""
-        return tuple(n for n, d in self.decisions.items() if d.applies)
+    @functools.cached_property
+    def luminance_p05(self) -> float:
+        """5th-percentile pixel luminance, cd/m² (computed on first use when deferred)."""
+        src = self.p05_source
+        if not callable(src):
+            return float(src)
+        value = float(src())
+        object.__setattr__(self, "p05_source", value)  # drop the luminance it held
+        return value
+
+    @functools.cached_property
+    def decisions(self) -> dict[str, Decision]:
+        """One :class:`Decision` per effect, with the numbers and thresholds."""
+        lo, hi = self.luminance_min, self.luminance_max
+        any_light = math.isfinite(lo) and math.isfinite(hi)
+        return decide(self.view, self.adaptation_global, self.luminance_p05, lo, hi, any_light)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the foveal image as nested lists)."""
-        d = dataclasses.asdict(self)
+        d: dict[str, Any] = {}
+        for f in dataclasses.fields(self):
+            if f.name == "p05_source":
+                continue
+            if f.name == "p05_rel_error":
+                d["luminance_p05"] = self.luminance_p05
+            d[f.name] = getattr(self, f.name)
+        d["view"] = dataclasses.asdict(self.view)
         d["adaptation_foveal"] = np.asarray(self.adaptation_foveal).tolist()
+        d["decisions"] = {k: dataclasses.asdict(v) for k, v in self.decisions.items()}
         d["selected"] = list(self.selected)
         return _json_safe(d)
 
@@ -163,19 +197,29 @@ def _json_safe(x: Any) -> Any:
     return x
 
 
-@functools.partial(jax.jit, static_argnames=("weights", "block", "stride"))
-def _fast_pass(rgb: jax.Array, weights: tuple[float, ...], block, stride) -> tuple:
-    """Luminance and the statistics of an image whose pixels are all finite and inside
-    ``(LMIN, LMAX)`` (the usual case; :func:`_measure` checks it from the results), in one
-    program: ``L``, block sums of ``L/(by·bx)``, ``min L``, ``max L`` and per-row sums of
-    ``ln L`` over the pixel subsample. Without masks every reduction vectorises on XLA:CPU.
-    ``L`` is returned for the percentile (NumPy reads it without a copy)."""
-    L = luminance(rgb, weights)
+def fast_statistics(L: jax.Array, block: tuple[int, int], stride: tuple[int, int]) -> tuple:
+    """The statistics of :func:`_fast_pass` from a luminance image (traceable): block sums
+    of ``L/(by·bx)``, ``min L``, ``max L`` and per-row sums of ``ln L`` over the pixel
+    subsample, with no mask (:func:`fast_report` checks afterwards that none was needed).
+    The foveal means, logarithms and extremes are left to NumPy: a consumer of the block
+    sums in this program would get its own copy of the strided-slice reduction."""
     by, bx = block
     sy, sx = stride
     num = block_reduce(L * (1.0 / (by * bx)), by, bx, jnp.add, 0.0)
     ln_rows = jnp.sum(jnp.log(L[sy // 2 :: sy, sx // 2 :: sx]), axis=1)
-    return L, num, jnp.min(L), jnp.max(L), ln_rows
+    return num, jnp.min(L), jnp.max(L), ln_rows
+
+
+@functools.partial(jax.jit, static_argnames=("weights", "block", "stride"))
+def _fast_pass(rgb: jax.Array, weights: tuple[float, ...], block, stride) -> tuple:
+    """Luminance and the statistics of an image whose pixels are all finite and inside
+    ``(LMIN, LMAX)`` (the usual case; :func:`fast_report` checks it from the results), in
+    one program: ``L`` and :func:`fast_statistics`. Without masks every reduction
+    vectorises on XLA:CPU. ``L`` is returned for the percentile (NumPy reads it without a
+    copy); as an output it is also written once, where the reductions read it (fused into
+    each of them, the luminance of the interleaved RGB would not vectorise)."""
+    L = luminance(rgb, weights)
+    return (L, *fast_statistics(L, block, stride))
 
 
 # The masked statistics, for images with non-finite or out-of-range pixels. One output per
@@ -284,45 +328,166 @@ def subsample_percentile(sub: np.ndarray, q: float, n_ok: int, n_low: int) -> fl
     return lo + (hi - lo) * (rank - k)
 
 
-def _measure(rgb: jax.Array, block: tuple[int, int], weights: tuple[float, ...]) -> dict:
-    """Statistics of :class:`SceneReport`; the small arrays are combined in float64 NumPy."""
-    stride = pixel_stride(block)
-    L, num, lmin, lmax, ln_rows = _fast_pass(rgb, weights, block, stride)
-    H, W = L.shape
-    sy, sx = stride
-    sub = np.asarray(L)[sy // 2 :: sy, sx // 2 :: sx]
-    num = np.asarray(num)
-    lmin, lmax = np.asarray(lmin), np.asarray(lmax)  # compared in their dtype, as the masks
-    if lmin > LMIN and lmax < LMAX and np.isfinite(num).all():  # (a NaN/Inf pixel makes
-        # its block sum non-finite): every pixel is finite and in range, no mask needed
-        cnt = np.outer(_block_counts(H, block[0]), _block_counts(W, block[1]))
-        ln, n_ok, n_low, lo, hi = np.asarray(ln_rows), sub.size, 0, float(lmin), float(lmax)
-    else:
-        num = np.asarray(_masked_fovea_sum(L, block))
-        cnt = np.asarray(_masked_fovea_count(L, block), np.float64)
-        r = jax.device_get(_masked_rows(L, stride))
-        ln, lo, hi = r["ln"], float(r["lo"]), float(r["hi"])
-        n_ok = int(np.sum(r["n_ok"], dtype=np.float64))
-        n_low = int(np.sum(r["n_low"], dtype=np.float64))
+def _fovea_terms(num: np.ndarray, cnt: np.ndarray, block: tuple[int, int]) -> tuple:
+    """The foveal image (block means of the finite pixels, float32 as the image) and the
+    terms of its in-range samples: ``(Σ ln, count, min, max)`` (logarithms of the float32
+    means, summed in float64)."""
     ok = cnt > 0
-    fovea = np.where(ok, num * (block[0] * block[1]) / np.where(ok, cnt, 1.0), 0.0)
-    fovea = fovea.astype(num.dtype)
-    fvals = fovea[ok & (fovea > LMIN) & (fovea < LMAX)].astype(np.float64)
+    full = bool(ok.all())
+    fovea = num * (block[0] * block[1]) / (cnt if full else np.where(ok, cnt, 1.0))
+    fovea = (fovea if full else np.where(ok, fovea, 0.0)).astype(num.dtype)
+    lo, hi = float(fovea.min()), float(fovea.max())
+    if full and lo > LMIN and hi < LMAX:  # every sample counts (the usual case)
+        return fovea, (float(np.sum(np.log(fovea), dtype=np.float64)), fovea.size, lo, hi)
+    fvals = fovea[ok & (fovea > LMIN) & (fovea < LMAX)]
+    if not fvals.size:
+        return fovea, (0.0, 0, math.inf, -math.inf)
+    terms = (float(np.sum(np.log(fvals), dtype=np.float64)), fvals.size)
+    return fovea, (*terms, float(fvals.min()), float(fvals.max()))
+
+
+@functools.lru_cache(maxsize=64)
+def _edge_factors(n: int, b: int, dtype: Any) -> np.ndarray:
+    """``b / (pixels in each block)`` along an axis: 1 but for a short last block."""
+    f = (b / _block_counts(n, b)).astype(dtype)
+    f.flags.writeable = False
+    return f
+
+
+def _assemble(
+    view: ResolvedView,
+    fovea: np.ndarray,
+    fterms: tuple[float, int, float, float],
+    ln_sum: float,
+    n_ok: int,
+    lo: float,
+    hi: float,
+    n_nonfinite: int,
+    p05: "float | None",
+    p05_of: Callable[[], float],
+) -> SceneReport:
+    """The report from the combined statistics. ``p05`` may be ``None`` (deferred): the
+    percentile rules are then decided from the range, or ``p05_of()`` is called now."""
     # pcond mean brightness: foveal and pixel samples weighted equally (mean_brightness)
-    means = [float(np.mean(np.log(fvals)))] if fvals.size else []
+    f_sum, f_n, f_lo, f_hi = fterms
+    means = [f_sum / f_n] if f_n else []
     if n_ok:
-        means.append(float(np.sum(ln, dtype=np.float64)) / n_ok)
+        means.append(ln_sum / n_ok)
+    if f_n:
+        lo, hi = min(f_lo, lo), max(f_hi, hi)
+    any_light = math.isfinite(lo) and math.isfinite(hi)
+    La = math.exp(sum(means) / len(means)) if means else LMIN
+    source: float | Callable[[], float]
+    selected = _selected_by_range(view, La, lo, hi) if p05 is None and any_light else None
+    if selected is None:
+        if p05 is None:
+            p05 = p05_of()
+        if any_light and not math.isfinite(p05):  # only foveal samples in range
+            p05 = lo
+        p05 = p05 if any_light else math.nan
+        d = decide(view, La, p05, lo, hi, any_light)
+        selected = tuple(n for n, x in d.items() if x.applies)
+        source = p05
+    else:
+        source = p05_of
     fy, fx = fovea.shape
-    return {
-        "fovea": fovea,
-        "centre": float(fovea[fy // 2, fx // 2]),
-        "adaptation": math.exp(sum(means) / len(means)) if means else LMIN,
-        "p05": subsample_percentile(sub, 5.0, n_ok, n_low),
-        "err": 0.0,
-        "lo": min(float(fvals.min()), lo) if fvals.size else lo,
-        "hi": max(float(fvals.max()), hi) if fvals.size else hi,
-        "n_nonfinite": int(H * W - np.sum(cnt, dtype=np.float64)),
-    }
+    return SceneReport(
+        view=view,
+        adaptation_global=La,
+        adaptation_centre=float(fovea[fy // 2, fx // 2]),
+        adaptation_foveal=fovea,
+        p05_rel_error=0.0,
+        luminance_min=lo if any_light else math.nan,
+        luminance_max=hi if any_light else math.nan,
+        dynamic_range=math.log(hi / lo) if any_light else math.nan,
+        n_pixels=int(view.height * view.width),
+        n_nonfinite=int(n_nonfinite),
+        glare_variant=variant_for(La),
+        selected=selected,
+        p05_source=source,
+    )
+
+
+def fast_report(
+    view: ResolvedView, L: jax.Array, *stats: Any, defer_p05: bool = False
+) -> SceneReport | None:
+    """The report from :func:`fast_statistics` (``*stats``) when no mask was needed (every
+    pixel finite and inside ``(LMIN, LMAX)``: the extremes are in range, and every foveal
+    sample is finite, as a NaN/Inf pixel makes its block's mean and ``ln`` non-finite), else
+    ``None``.
+
+    With ``defer_p05`` the 5th percentile is left for first use when the luminance range
+    decides its rules (see :class:`SceneReport`)."""
+    num, lmin, lmax, ln_rows = jax.device_get(stats)
+    if not (lmin > LMIN and lmax < LMAX):  # compared in their dtype, as the masks
+        return None
+    H, W = L.shape
+    (by, bx), (sy, sx) = view.fovea_block, pixel_stride(view.fovea_block)
+    # block means: factors 1 for full blocks (exact), by/rows, bx/columns at the short edges
+    fovea = num * _edge_factors(H, by, num.dtype)[:, None] * _edge_factors(W, bx, num.dtype)
+    f_ln = np.log(fovea)
+    f_sum, f_min, f_max = float(np.sum(f_ln, dtype=np.float64)), fovea.min(), fovea.max()
+    if not math.isfinite(f_sum):  # a NaN/Inf pixel makes its block's mean non-finite
+        return None
+    n_ok = len(range(sy // 2, H, sy)) * len(range(sx // 2, W, sx))
+    if f_min > LMIN and f_max < LMAX:  # every foveal sample counts (the usual case)
+        fterms = (f_sum, fovea.size, float(f_min), float(f_max))
+    else:  # means that round past an end of the range
+        fvals = fovea[(fovea > LMIN) & (fovea < LMAX)]
+        fterms = (
+            float(np.sum(np.log(fvals), dtype=np.float64)),
+            fvals.size,
+            float(fvals.min(initial=math.inf)),
+            float(fvals.max(initial=-math.inf)),
+        )
+
+    def p05_of() -> float:
+        sub = np.asarray(L)[sy // 2 :: sy, sx // 2 :: sx]
+        return subsample_percentile(sub, 5.0, sub.size, 0)
+
+    return _assemble(
+        view,
+        fovea,
+        fterms,
+        float(np.sum(ln_rows, dtype=np.float64)),
+        n_ok,
+        float(lmin),
+        float(lmax),
+        0,
+        None if defer_p05 else p05_of(),
+        p05_of,
+    )
+
+
+def masked_report(view: ResolvedView, L: jax.Array) -> SceneReport:
+    """The report of an image with non-finite or out-of-range pixels (masked programs)."""
+    block = view.fovea_block
+    stride = pixel_stride(block)
+    H, W = L.shape
+    num = np.asarray(_masked_fovea_sum(L, block))
+    cnt = np.asarray(_masked_fovea_count(L, block), np.float64)
+    r = jax.device_get(_masked_rows(L, stride))
+    n_ok = int(np.sum(r["n_ok"], dtype=np.float64))
+    n_low = int(np.sum(r["n_low"], dtype=np.float64))
+    fovea, fterms = _fovea_terms(num, cnt, block)
+    sy, sx = stride
+
+    def p05_of() -> float:
+        sub = np.asarray(L)[sy // 2 :: sy, sx // 2 :: sx]
+        return subsample_percentile(sub, 5.0, n_ok, n_low)
+
+    return _assemble(
+        view,
+        fovea,
+        fterms,
+        float(np.sum(r["ln"], dtype=np.float64)),
+        n_ok,
+        float(r["lo"]),
+        float(r["hi"]),
+        int(H * W - np.sum(cnt, dtype=np.float64)),
+        p05_of(),
+        p05_of,
+    )
 
 
 def _acuity_of(L: float) -> float:
@@ -391,37 +556,57 @@ def decide(
     return out
 
 
+def _selected_by_range(
+    view: ResolvedView, adaptation: float, lo: float, hi: float
+) -> tuple[str, ...] | None:
+    """The selection of :func:`decide` without the 5th percentile, which lies in
+    ``[lo, hi]``: every percentile rule (``R(L_5%) < samples/degree``, ``L_5% < 5.62``,
+    ``L_5% < 3.98``) is monotone in it, so it is decided when ``lo`` and ``hi`` give the
+    same verdict. ``None`` when one of them does not (the percentile is needed)."""
+    spd = view.samples_per_degree
+    verdicts = {}
+    for name, value_of, threshold in (
+        ("acuity", _acuity_of, spd),
+        ("colour_loss", float, TOP_MESOPIC),
+        ("blue_shift", float, BLUE_SHIFT_TOP),
+    ):
+        at_lo, at_hi = value_of(lo) < threshold, value_of(hi) < threshold
+        if at_lo != at_hi:
+            return None
+        verdicts[name] = at_lo
+    verdicts["glare"] = math.log(hi / lo) >= VEIL_RANGE
+    verdicts["contrast"] = adaptation < WEBER_ONSET
+    return tuple(n for n in EFFECTS if verdicts[n])
+
+
 def analyze_rgb(
-    rgb: jax.Array, view: ResolvedView, weights: tuple[float, float, float]
+    rgb: jax.Array,
+    view: ResolvedView,
+    weights: tuple[float, float, float],
+    *,
+    defer_p05: bool = False,
 ) -> SceneReport:
-    """:func:`hdrjax.vision.analyze` on an RGB array already in cd/m²."""
+    """:func:`hdrjax.vision.analyze` on an RGB array already in cd/m² (``defer_p05``: see
+    :class:`SceneReport`)."""
     if isinstance(rgb, jax.core.Tracer):
         raise ValueError(
             "analyze needs concrete values (its verdicts decide what gets compiled): call it "
             "outside jax.jit/vmap/grad, or pass the effects explicitly to HumanVision"
         )
-    m = _measure(rgb, view.fovea_block, tuple(float(w) for w in weights))
-    lo, hi = m["lo"], m["hi"]
-    any_light = math.isfinite(lo) and math.isfinite(hi)
-    La = float(m["adaptation"])
-    p05 = float(m["p05"])
-    if any_light and not math.isfinite(p05):  # only foveal samples in range
-        p05 = lo
-    return SceneReport(
-        view=view,
-        adaptation_global=La,
-        adaptation_centre=float(m["centre"]),
-        adaptation_foveal=np.asarray(m["fovea"]),
-        luminance_p05=p05 if any_light else math.nan,
-        p05_rel_error=float(m["err"]),
-        luminance_min=lo if any_light else math.nan,
-        luminance_max=hi if any_light else math.nan,
-        dynamic_range=math.log(hi / lo) if any_light else math.nan,
-        n_pixels=int(rgb.shape[0] * rgb.shape[1]),
-        n_nonfinite=int(m["n_nonfinite"]),
-        glare_variant=variant_for(La),
-        decisions=decide(view, La, p05, lo, hi, any_light),
-    )
+    block = view.fovea_block
+    L, *stats = _fast_pass(rgb, tuple(float(w) for w in weights), block, pixel_stride(block))
+    rep = fast_report(view, L, *stats, defer_p05=defer_p05)
+    return rep if rep is not None else masked_report(view, L)
 
 
-__all__ = ["BLUE_SHIFT_TOP", "EFFECTS", "Decision", "SceneReport", "analyze_rgb", "decide"]
+__all__ = [
+    "BLUE_SHIFT_TOP",
+    "EFFECTS",
+    "Decision",
+    "SceneReport",
+    "analyze_rgb",
+    "decide",
+    "fast_report",
+    "masked_report",
+    "fast_statistics",
+]

@@ -9,6 +9,12 @@ Order (pcond's): ``acuity`` → ``glare`` → ``colour_loss``/``blue_shift`` →
 An effect that is not selected is not traced: the compiled function holds no operation of
 it (tests/vision/test_simulate.py counts them in the lowered program).
 
+Tone mapping: ``simulate(..., then=op)`` returns ``op`` applied to the result, the same image
+as ``op(simulate(...)[0])``. For a global operator (a luminance curve) the analysis and the
+tone mapping of the unmodified image run as one compiled program that reads the image once;
+its image is returned when the scene calls for no effect (a daylight scene then costs about
+one tone mapping), and discarded otherwise (the effects run, then ``op``).
+
 Relative images: an array has no units, so :func:`simulate` and :func:`analyze` require
 ``scale`` (cd/m² per stored unit; 1.0 for an image already in cd/m²). A layered image from
 ``hdrjax.io.read`` in cd/m² (or W/sr/m², converted with Radiance's 179 lm/W) needs none; a
@@ -26,13 +32,21 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from ..operators._base import AbstractLuminanceCurve, AbstractOperator, make_operator
 from ._acuity import acuity_loss, max_levels
 from ._contrast import DISPLAY_MAX, DISPLAY_RANGE, ContrastModel, contrast
-from ._fovea import adaptation_luminance
+from ._fovea import adaptation_luminance, pixel_stride
 from ._jensen2001 import blue_shift
 from ._pcond import colour_loss, veil
 from ._photometry import LMIN, _chroma_key, check_rgb, weights_of
-from ._report import EFFECTS, SceneReport, analyze_rgb
+from ._report import (
+    EFFECTS,
+    SceneReport,
+    analyze_rgb,
+    fast_report,
+    fast_statistics,
+    masked_report,
+)
 from ._spencer1995 import Variant, apply_glare, glare_spectrum
 from ._view import ResolvedView, View, as_view
 
@@ -330,6 +344,47 @@ def analyze(
     return analyze_rgb(rgb, rv, weights_of(ch))
 
 
+def _operator(then: "AbstractOperator | str | None") -> AbstractOperator | None:
+    if then is None or isinstance(then, AbstractOperator):
+        return then
+    if isinstance(then, str):
+        return make_operator(then)
+    raise ValueError(
+        f"then: expected a tone-mapping operator (an hdrjax operator or a registered name "
+        f"such as 'reinhard2002'), got {type(then).__name__}"
+    )
+
+
+def _may_select_nothing(effects: "str | tuple[str, ...] | Mapping[str, bool]") -> bool:
+    """Whether ``effects`` can resolve to no effect (so the image may go straight to the
+    tone mapping): ``"auto"``, ``"none"``, or overrides that force nothing on."""
+    if isinstance(effects, str):
+        key = effects.strip().lower()
+        return key in ("auto", "none") or not any(e.strip() for e in key.split(","))
+    if isinstance(effects, Mapping):
+        return not any(bool(v) for v in effects.values())
+    return not effects
+
+
+@eqx.filter_jit
+def _analyze_and_tonemap(
+    op: AbstractOperator,
+    rgb: Array,
+    weights: tuple[float, float, float],
+    block: tuple[int, int],
+    stride: tuple[int, int],
+) -> tuple:
+    """The analysis statistics and ``op(rgb)`` in one program, for an image that turns out
+    to be clean (the caller checks it from the statistics and discards the image
+    otherwise). The tone mapping takes the operators' finite-image path; its luminance is
+    the analysis's (the same expression, merged by XLA when the weights are the same), so
+    the image is read for both at once."""
+    from ..batch._pipeline import clean_operator_call  # the batch package imports vision
+
+    L = luminance(rgb, weights)
+    return (clean_operator_call(op, rgb), L, *fast_statistics(L, block, stride))
+
+
 def simulate(
     image: Any,
     view: "View | float | None" = None,
@@ -343,6 +398,7 @@ def simulate(
     contrast_model: ContrastModel = "pcond",
     display_max: float = DISPLAY_MAX,
     display_range: float = DISPLAY_RANGE,
+    then: "AbstractOperator | str | None" = None,
 ) -> tuple[Float[Array, "H W 3"], SceneReport]:
     """Simulate what a human observer sees: apply only the effects the scene calls for.
 
@@ -360,11 +416,20 @@ def simulate(
         contrast_model: ``"pcond"`` (combined TVI) or ``"ward1994"``.
         display_max: display maximum luminance, cd/m² (``contrast``).
         display_range: display ``L_max/L_min`` (``contrast``, pcond model).
+        then: a tone-mapping operator (an ``hdrjax.operators`` instance or a registered
+            name, as in ``hdrjax.tonemap``) applied to the result: the same image as
+            ``op(simulate(...)[0])``, faster. When the scene calls for no effect (a
+            daylight scene), the analysis and a global operator's tone mapping run as one
+            compiled program that reads the image once for both; when it calls for some,
+            that tone mapping is discarded (one extra global tone mapping on a scene whose
+            effects cost far more).
 
     Returns:
-        ``(rgb, report)``: RGB in cd/m² (display cd/m² after ``contrast``) and the
-        :class:`SceneReport`. Not traceable itself (the report decides what to compile);
-        use :meth:`HumanVision.build` under ``jax.jit``/``vmap``/``grad``.
+        ``(rgb, report)``: RGB in cd/m² (display cd/m² after ``contrast``), or the
+        operator's display-referred RGB with ``then``, and the :class:`SceneReport` (its
+        5th percentile found on first use when the range decided the rules). Not
+        traceable itself (the report decides what to compile); use
+        :meth:`HumanVision.build` under ``jax.jit``/``vmap``/``grad``.
     """
     rgb, ch = absolute_rgb(image, scale, chromaticities)
     if isinstance(rgb, jax.core.Tracer):
@@ -372,11 +437,25 @@ def simulate(
             "simulate decides what to compile from concrete values; under jax.jit/vmap/grad "
             "use HumanVision.build(shape, view, effects)(rgb)"
         )
+    op = _operator(then)
+    if not isinstance(effects, str | Mapping):
+        effects = tuple(effects)  # read once (it may be an iterator)
     rv = as_view(view).resolve(rgb.shape[0], rgb.shape[1])
-    report = analyze_rgb(rgb, rv, weights_of(ch))
+    weights = weights_of(ch)
+    report = None
+    if isinstance(op, AbstractLuminanceCurve) and _may_select_nothing(effects):
+        block = rv.fovea_block
+        shown, L, *stats = _analyze_and_tonemap(op, rgb, weights, block, pixel_stride(block))
+        report = fast_report(rv, L, *stats, defer_p05=True)
+        if report is not None and not select_effects(effects, report):
+            return shown, report  # a clean image that calls for nothing: already mapped
+        if report is None:
+            report = masked_report(rv, L)
+    if report is None:
+        report = analyze_rgb(rgb, rv, weights, defer_p05=True)
     names = select_effects(effects, report)
-    if not names:
-        return rgb, report  # nothing selected: nothing traced, nothing computed
+    if not names:  # nothing selected: nothing traced, nothing computed
+        return (rgb if op is None else op(rgb)), report
     fov = report.adaptation_foveal
     fmin = float(np.min(fov)) if fov.size else LMIN
     step = HumanVision.build(
@@ -394,7 +473,8 @@ def simulate(
         chromaticities=ch,
         dtype=rgb.dtype,
     )
-    return step(rgb), report
+    out = step(rgb)
+    return (out if op is None else op(out)), report
 
 
 __all__ = [
