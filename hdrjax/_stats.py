@@ -6,32 +6,50 @@ Pixels whose value is NaN or ±Inf are *excluded* from every statistic (and coun
 positive luminance, except the paper's log-average, which clamps negatives to zero and adds
 ``delta`` (Reinhard et al. 2002, Eq. 1).
 
-Percentiles default to a histogram of ``ln L`` (``bins`` equal bins between the smallest and
-largest positive value) instead of a sort: XLA's CPU sort runs on one core at ~0.7 Mpixel/s,
-so a 4096² sort costs ~20 s while the histogram costs ~45 ms of CPU time. Within the bin
-that holds the requested rank the value is interpolated linearly in ``ln L``; the true
-percentile lies in the same bin, so the estimate is within one bin width (in ``ln L``) of
-the order statistic ``x_(floor(q (n-1)))`` and its relative error is at most
-``expm1((ln max - ln min) / bins)`` — returned as ``rel_error_bound``. (``numpy.percentile`` also
-interpolates towards the next order statistic; that step is not reproduced, which matters
-only where two consecutive values are further apart than a bin, i.e. for tiny pixel counts.)
-With the default 8192 bins and a 30-stop image that is 0.25 %. ``method="exact"`` sorts (the
-same linear interpolation as ``numpy.percentile``) and is differentiable; the histogram
-result is a constant for ``jax.grad``.
+Percentiles default to a histogram instead of a sort (XLA's CPU sort runs on one core at
+~0.7 Mpixel/s, so a 4096² sort costs ~20 s). The grid is fixed and needs no range: a
+pixel's bin is its float32 bit pattern shifted right by ``23 − m`` (the exponent and the
+top ``m`` mantissa bits; ``m = ceil(log2 bins) − 3``, 10 for the default 8192 bins, i.e.
+1024 bins per octave). So the histogram needs no min/max pass first, comes from the same
+pass as the other statistics, and histograms of tiles or frames merge by addition. A bin
+spans ``[e, e (1 + 2^-m / (1 + f))]`` (``f`` the mantissa of its lower edge ``e``), at most
+a factor ``1 + 2^-m``. Within the bin that holds the requested rank the value is
+interpolated linearly in ``ln L``; the true percentile (the order statistic
+``x_(floor(q (n-1)))``) lies in the same bin, so the relative error is at most ``2^-m``
+(0.098 % by default, for any dynamic range) — returned as ``rel_error_bound``.
+float64 luminance is binned after rounding to float32 (values beyond float32's range are
+clamped to it; the bound becomes ``(1 + 2^-m)(1 + 2^-24) − 1`` inside that range).
+(``numpy.percentile`` also interpolates towards the next order statistic; that step is not
+reproduced, which matters only where two consecutive values are further apart than a bin,
+i.e. for tiny pixel counts.) ``method="exact"`` sorts (the same linear interpolation as
+``numpy.percentile``) and is differentiable; the histogram result is a constant for
+``jax.grad``.
+
+The JGT trimmed log-average (pixels ``≤ p99``) also comes from the histogram, with no
+further pass: the pixels of each full bin below p99's bin count at the bin's geometric
+centre (at most half a bin off in ``ln L``: ``ln(1 + 2^-m) / 2``, 0.049 %), and p99's own
+bin contributes the interpolated fraction of its ``c_b`` pixels. Its error in ``ln`` is at
+most ``ln(1 + 2^-m) / 2 + c_b (a + 2w − ln min_positive) / N_F`` (``a``, ``w``: the boundary
+bin's lower edge and width in ``ln L``; ``N_F`` the pixels of the full bins), as each
+boundary pixel counted in or out moves the mean by at most ``(a + 2w − ln min) / N_F``; for
+a 16-Mpixel image the second term is ~1e-5. Its gradient is that of the exact formula.
+``method="exact"`` keeps the exact definitions (sorted percentiles, a pass over the pixels
+``≤ p99``).
 
 Speed on XLA:CPU (what shapes the code): a reduction over a plain expression of ``L`` is
 fused and vectorised, but one over a mask or a select is not, and every intermediate that
 feeds a scatter or an unfusable reduction becomes a fresh full-size buffer (page faults
 and writes cost more than the arithmetic). So an image whose pixels are all finite and
-positive takes plain ``min``/``max``/``sum`` reductions; masks, ``ln L``, bin indices and
-the histogram's scatter run over 1 MiB blocks in a loop, where their temporaries stay in
-cache (:func:`_blockwise`); the histogram is four interleaved copies (filled by two
-independent loops). The blocked passes are ``custom_jvp`` functions whose derivatives are
-those of the plain ``jnp`` formulas (extrema: shared by tied pixels; log-averages: the
-chain rule), so gradients are unchanged.
+positive takes plain ``min``/``max``/``sum`` reductions; the histogram's scatter runs over
+1 MiB blocks in a loop, where its bin indices stay in cache (:func:`_blockwise`); it needs
+no mask (NaN, ±Inf and negative values have bit patterns past the grid's end, zero and
+subnormals fall in bins that are ignored). The masked extrema pass and the exact trimmed
+sum are ``custom_jvp`` functions whose derivatives are those of the plain ``jnp`` formulas
+(extrema: shared by tied pixels; log-averages: the chain rule), so gradients are unchanged.
 """
 
 import functools
+import math
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -85,7 +103,9 @@ class LuminanceStats(eqx.Module):
         p01, p99: 1st and 99th percentiles of the finite positive luminance.
         log_average_trimmed: ``exp(mean(ln L))`` over finite positive pixels with
             ``L <= p99`` (JGT 2002 key estimation, "remove extreme values as in the paper").
-        rel_error_bound: bound on the relative error of ``p01``/``p99`` (0 for exact).
+        rel_error_bound: bound on the relative error of ``p01``/``p99`` (0 for exact;
+            ``2^-m`` for the histogram, module docstring; the trimmed log-average's own
+            bound is given there).
     """
 
     n_pixels: Int[Array, ""]
@@ -157,39 +177,122 @@ def _blockwise(fn: Callable, carry: Any, *arrays: Array, part: tuple[int, int] =
     return carry, jax.tree.map(lambda a, b: jnp.concatenate([a, b]), *outs)
 
 
-def _bin_index(lnL: Array, pos: Array, lo: Array, width: Array, bins: int) -> Array:
-    """Histogram bin of each ``ln L`` on ``[lo, lo + bins · width]``, or ``bins`` (one past
-    the last) outside ``pos`` (hdrjax.tile reproduces this formula)."""
-    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
-    return jnp.where(pos, idx, bins)
+MAX_MANTISSA_BITS = 13
+"""Finest grid: 2¹³ bins per octave (``bins ≥ 65536``)."""
 
 
-SUB_HISTOGRAMS = 4
-"""Interleaved copies of the histogram: consecutive pixels, often in the same bin, update
-different copies, so the scatter loop does not wait on its own previous store."""
+def mantissa_bits(bins: int) -> int:
+    """Mantissa bits ``m`` the histogram keeps for ``bins``: ``ceil(log2 bins) − 3``, clipped
+    to ``[0, 13]`` — 2^m bins per octave, as many as ``bins`` equal bins give over 8 octaves
+    (10 bits, 1024 per octave, for the default 8192)."""
+    return int(np.clip(math.ceil(math.log2(max(int(bins), 1))) - 3, 0, MAX_MANTISSA_BITS))
 
 
-def _histogram(L: Array, valid: Array | None, lo: Array, width: Array, bins: int) -> Array:
-    """Counts of the valid (finite, ≥ tiny) pixels of ``L`` in ``bins`` bins of ``ln L``."""
-    big, tiny = float(jnp.finfo(L.dtype).max), float(jnp.finfo(L.dtype).tiny)
-    L = jax.lax.stop_gradient(L)
-    k = SUB_HISTOGRAMS
+def grid_size(m: int) -> int:
+    """Bins of the fixed grid with ``m`` mantissa bits: every float32 bit pattern below +Inf
+    (exponent field 0…254); bins ``0 … 2^m − 1`` hold zero and subnormals and are ignored."""
+    return 255 << m
+
+
+def rel_error_bound(m: int, dtype) -> float:
+    """Relative error bound of a histogram percentile with ``m`` mantissa bits: a bin spans
+    ``[e, e (1 + 2^-m (1 + f)^-1)]`` for mantissa ``f ∈ [0, 1)``, at most a factor
+    ``1 + 2^-m``. float64 values are binned after rounding to float32 (relative error
+    ``2^-24``), hence ``(1 + 2^-m)(1 + 2^-24) − 1`` for them."""
+    b = 2.0**-m
+    return b if np.dtype(dtype).itemsize <= 4 else (1 + b) * (1 + 2.0**-24) - 1
+
+
+def _as_f32_for_bins(L: Array) -> Array:
+    """float32 luminance for the bit-pattern bins: float64 finite values ``≥ tiny`` are
+    clamped to float32's positive normal range; NaN, ±Inf, zero, negatives stay outside it."""
+    if L.dtype == jnp.float32:
+        return L
+    t64, b64 = float(jnp.finfo(L.dtype).tiny), float(jnp.finfo(L.dtype).max)
+    f32 = np.finfo(np.float32)
+    ok = (L >= t64) & (L <= b64)
+    return jnp.where(ok, jnp.clip(L, float(f32.tiny), float(f32.max)), L).astype(jnp.float32)
+
+
+def _bin_index(L32: Array, m: int) -> Array:
+    """Bin of each float32 value on the fixed grid: its bit pattern shifted right by
+    ``23 − m`` (exponent and the top ``m`` mantissa bits), so bins are ``2^-m`` octave-
+    relative wide and need no range. NaN, +Inf and negative values (sign bit set: large as
+    unsigned) map to ``grid_size(m)``, one past the end (hdrjax.tile reproduces this)."""
+    bits = jax.lax.bitcast_convert_type(L32, jnp.uint32) >> (23 - m)
+    return jnp.minimum(bits, grid_size(m)).astype(jnp.int32)
+
+
+def _histogram(L: Array, valid: Array | None, m: int) -> Array:
+    """Counts on the fixed bit-pattern grid (``grid_size(m)`` bins) of the pixels of ``L``
+    (and ``valid``); only bins ``≥ 2^m`` (finite, ``≥ tiny``) are used by the callers."""
+    L = _as_f32_for_bins(jax.lax.stop_gradient(L))
+    nb = grid_size(m)
 
     def block(counts, Lb, *vb):
-        pos = (Lb >= tiny) & (Lb <= big)  # finite and positive (NaN compares false)
+        idx = _bin_index(Lb, m)
         if vb:
-            pos = pos & vb[0]
-        idx = _bin_index(jnp.log(jnp.maximum(Lb, tiny)), pos, lo, width, bins)
-        # pixel i counts in copy i mod k; excluded pixels (idx = bins) land past the end
-        idx = idx + (jnp.arange(Lb.shape[0], dtype=jnp.int32) % k) * (bins + 1)
+            idx = jnp.where(vb[0], idx, nb)
         return counts.at[idx].add(1, mode="drop"), None
 
     args = (L,) if valid is None else (L, valid)
-    # two independent loops (halves of the image), which XLA:CPU's thunk runtime may run
-    # on two cores (no gain was measurable on a loaded 2-core machine; none is lost)
-    zero = jnp.zeros(k * (bins + 1), jnp.int32)
-    halves = [_blockwise(block, zero, *args, part=(j, 2))[0] for j in range(2)]
-    return (halves[0] + halves[1]).reshape(k, bins + 1)[:, :bins].sum(axis=0)
+    return _blockwise(block, jnp.zeros(nb + 1, jnp.int32), *args)[0][:nb]
+
+
+def _bin_edges(m: int, dtype) -> tuple[Array, Array]:
+    """``ln`` of the lower edge of every bin of the grid and of the next bin's (float32
+    patterns ``b << (23 − m)``; the last upper edge is float32's max)."""
+    nb = grid_size(m)
+    b = np.arange(nb + 1, dtype=np.uint64) << np.uint64(23 - m)
+    e = b.astype(np.uint32).view(np.float32).astype(np.float64)
+    e[-1] = np.finfo(np.float32).max
+    with np.errstate(divide="ignore"):
+        ln = np.log(np.maximum(e, np.finfo(np.float32).tiny))
+    return jnp.asarray(ln[:-1], dtype), jnp.asarray(ln[1:], dtype)
+
+
+def _from_counts(counts: Array, qs: Array, lmin: Array, lmax: Array, m: int):
+    """Percentiles ``qs`` of the positive pixels, clipped to ``[lmin, lmax]`` (their
+    extrema), and ``(n_kept, Σ ln L)`` estimated for the pixels ``≤`` the last percentile
+    (the JGT trimmed log-average), from counts on the fixed grid.
+
+    Rank ``q (n − 1)`` as :func:`numpy.percentile`; inside the bin that holds it the value
+    is interpolated linearly in ``ln L`` (fraction ``(rank − before + ½) / count``). For the
+    trimmed sum every pixel of a full bin below counts at its bin's geometric centre (error
+    at most half a bin in ``ln L``), and the boundary bin contributes that same fraction of
+    its pixels at the centre of the part below the percentile.
+    """
+    dt = lmin.dtype
+    c = counts.at[: 1 << m].set(0)  # zero and subnormals
+    lo, hi = _bin_edges(m, dt)
+    n = jnp.sum(c)
+    cum = jnp.cumsum(c)
+    rank = qs * jnp.maximum(n - 1, 0).astype(dt)
+    # a rank within rounding of an integer is that integer: q = 99 % of 10001 pixels is
+    # rank 9900, which float32 may give as 9899.9995 (``q / 100`` rounded either way, jit or
+    # not); its floor would pick the previous order statistic and its bin
+    near = jnp.round(rank)
+    rank = jnp.where(jnp.abs(rank - near) <= 8 * jnp.finfo(dt).eps * near, near, rank)
+    b = jnp.searchsorted(cum, jnp.floor(rank).astype(cum.dtype), side="right")
+    b = jnp.clip(b, 0, c.shape[0] - 1)
+    before = jnp.where(b > 0, cum[jnp.maximum(b - 1, 0)], 0).astype(dt)
+    inside = jnp.maximum(c[b], 1).astype(dt)
+    frac = jnp.clip((rank - before + 0.5) / inside, 0.0, 1.0)
+    # every pixel lies in [lmin, lmax]: clip the bins' ln range to it (exact for a
+    # constant image; the bounds still hold)
+    lnmin, lnmax = jnp.log(lmin), jnp.log(lmax)
+    lo, hi = jnp.clip(lo, lnmin, lnmax), jnp.clip(hi, lnmin, lnmax)
+    lnv = lo[b] + frac * (hi[b] - lo[b])
+    vals = jnp.clip(jnp.exp(lnv), lmin, lmax)
+    # trimmed sum below the last percentile
+    bt, ft = b[-1], frac[-1]
+    cf = c.astype(dt)
+    centre = 0.5 * (lo + hi)
+    below = jnp.arange(c.shape[0]) < bt
+    n_kept = jnp.sum(jnp.where(below, cf, 0.0)) + ft * cf[bt]
+    s_kept = jnp.sum(jnp.where(below, cf * centre, 0.0))
+    s_kept = s_kept + ft * cf[bt] * (lo[bt] + 0.5 * (lnv[-1] - lo[bt]))
+    return vals, n_kept, s_kept
 
 
 def _histogram_percentiles(
@@ -201,21 +304,26 @@ def _histogram_percentiles(
     qs: Array,
     bins: int,
 ) -> tuple[Array, Array]:
-    """Percentiles from a histogram of ``ln L`` over ``valid`` (default: the finite pixels
-    ``≥ tiny``) on [lo, hi] (see the module docstring)."""
-    lo = jnp.where(n > 0, lo, 0.0)
-    hi = jnp.where(n > 0, hi, 0.0)
-    width = jnp.maximum(hi - lo, 1e-20) / bins
-    counts = _histogram(L, valid, lo, width, bins)
-    vals = jnp.clip(_hist_quantiles(counts, lo, width, qs), jnp.exp(lo), jnp.exp(hi))
-    return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, jnp.expm1(width), 0.0)
+    """Percentiles from the fixed-grid histogram (``mantissa_bits(bins)``) of the pixels
+    ``valid`` (default: all; only finite ones ``≥ tiny`` count); ``n`` is their number and
+    ``lo``/``hi`` the ``ln`` of their extrema, which clip the result (module docstring)."""
+    m = mantissa_bits(bins)
+    counts = _histogram(L, valid, m)
+    mn = jnp.exp(jnp.where(n > 0, lo, 0.0))
+    mx = jnp.exp(jnp.where(n > 0, hi, 0.0))
+    vals = _from_counts(counts, qs, mn, mx, m)[0]
+    err = jnp.asarray(rel_error_bound(m, L.dtype), L.dtype)
+    return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, err, 0.0)
 
 
-def _positive_range(L: Array, valid: Array | None) -> tuple[Array, Array, Array, Array]:
+def _positive_range(
+    L: Array, valid: Array | None, known_finite: bool = False
+) -> tuple[Array, Array, Array, Array]:
     """``(n_valid, n_positive, min, max)``: the valid pixels (finite, and in ``valid`` when
     given) and, among them, those ``≥ tiny`` with their extrema (1 when there are none).
     Constants for ``jax.grad``. Without a mask an image whose pixels are all finite and
-    ``≥ tiny`` takes plain reductions; otherwise one blocked pass."""
+    ``≥ tiny`` takes plain reductions; otherwise one blocked pass. ``known_finite``: the
+    caller has checked that every pixel is finite (skips the sum that tells)."""
     L = jax.lax.stop_gradient(L)
     dt = L.dtype
     big, tiny = float(jnp.finfo(dt).max), float(jnp.finfo(dt).tiny)
@@ -242,7 +350,7 @@ def _positive_range(L: Array, valid: Array | None) -> tuple[Array, Array, Array,
         return masked(L, valid)
     # XLA:CPU's min/max skip NaN in large arrays: the sum tells NaN and ±Inf apart
     lmin, lmax = jnp.min(L, initial=big), jnp.max(L, initial=tiny)
-    clean = (lmin >= tiny) & jnp.isfinite(jnp.sum(L))
+    clean = lmin >= tiny if known_finite else (lmin >= tiny) & jnp.isfinite(jnp.sum(L))
     n_pix = jnp.asarray(L.size, i32)
 
     def fast(L, lmin, lmax):
@@ -266,7 +374,9 @@ def percentile(
         q: percentiles in [0, 100].
         method: ``"histogram"`` (default; fast, error bounded as in the module docstring) or
             ``"exact"`` (sorts; differentiable; slow on CPU for large images).
-        bins: histogram bins over ``[ln min, ln max]``.
+        bins: histogram resolution: ``2^(ceil(log2 bins) − 3)`` bins per octave (1024 for
+            the default 8192, at most 8192 per octave); the bound is ``2^-m`` (module
+            docstring).
         where: optional boolean mask of the pixels to use (e.g. a region).
 
     Returns:
@@ -414,6 +524,23 @@ def _kept_sum_jvp(assume_finite, primals, tangents):
     return out, (np.zeros((), jax.dtypes.float0), jnp.sum(jnp.where(kept, t * slope, 0.0)))
 
 
+@jax.custom_jvp
+def _trimmed_log_mean(L: Array, p99: Array, estimate: Array) -> Array:
+    """``estimate`` (the histogram's mean ``ln L`` of the kept pixels) with the derivative of
+    the plain formula ``mean(ln L | tiny ≤ L ≤ p99)`` in ``L``, as the exact pass gives."""
+    return jax.lax.stop_gradient(estimate)
+
+
+@_trimmed_log_mean.defjvp
+def _trimmed_log_mean_jvp(primals, tangents):
+    (L, p99, est), (t, _, _) = primals, tangents
+    tiny = jnp.finfo(L.dtype).tiny
+    kept = (L >= tiny) & (L <= p99)
+    slope = jnp.where(L > tiny, 1.0, 0.5) / jnp.where(kept, L, 1.0)
+    n = jnp.maximum(jnp.sum(kept), 1).astype(L.dtype)
+    return _trimmed_log_mean(L, p99, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
+
+
 def measure(
     L: Float[ArrayLike, "H W"],
     *,
@@ -428,9 +555,9 @@ def measure(
     extrema and log-averages; histogram percentiles are constants (see module docstring).
     ``assume_finite=True`` skips the NaN/Inf masking (the operators check this first).
 
-    Three passes over ``L`` (module docstring, "Speed"): counts, extrema and the
-    log-average; the histogram on ``[ln min_positive, ln max]``; the trimmed log-average
-    below ``p99``.
+    Two independent passes over ``L`` (module docstring, "Speed"): plain reductions for the
+    extrema and the log-average, and the fixed-grid histogram, from which come ``p01``,
+    ``p99`` and the trimmed log-average (``method="exact"``: a sort and a third pass).
     """
     _check.positive(delta, "delta", zero=True)
     _check.integer(bins, "bins", 2)
@@ -449,15 +576,24 @@ def measure(
     qs = jnp.array([0.01, 0.99], dt)
     if method == "exact":
         (p01, p99), err = percentile(L, 100 * qs, method="exact")
+        p01 = jnp.where(any_pos, p01, 1.0)
+        p99 = jnp.where(any_pos, p99, 1.0)
+        n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
+        trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1).astype(dt))
+        trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
     else:
-        lo = jnp.log(jax.lax.stop_gradient(minpos))
-        hi = jnp.log(jax.lax.stop_gradient(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)))
-        (p01, p99), err = _histogram_percentiles(L, None, n_pos, lo, hi, qs, int(bins))
-    p01 = jnp.where(any_pos, p01, 1.0)
-    p99 = jnp.where(any_pos, p99, 1.0)
-    n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
-    trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1).astype(dt))
-    trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
+        m = mantissa_bits(bins)
+        counts = _histogram(L, None, m)
+        mx = jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)
+        (p01, p99), n_kept, kept_sum = _from_counts(
+            counts, qs, jax.lax.stop_gradient(minpos), jax.lax.stop_gradient(mx), m
+        )
+        p01 = jnp.where(any_pos, p01, 1.0)
+        p99 = jnp.where(any_pos, p99, 1.0)
+        err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
+        mean_ln = kept_sum / jnp.maximum(n_kept, 1e-30)
+        trimmed = jnp.exp(_trimmed_log_mean(L, jax.lax.stop_gradient(p99), mean_ln))
+        trimmed = jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
     return LuminanceStats(
         n_pixels=n_pix,
         n_nonfinite=n_pix - n_fin,

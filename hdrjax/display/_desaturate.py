@@ -13,9 +13,10 @@ the paper:
 
 Automatic threshold (the paper's final version): ``T = 2 · L₉₀``, where ``L₉₀`` is the
 luminance that only 10 % of the image's finite pixels exceed. It comes from
-:func:`hdrjax.stats.percentile`'s histogram (relative error at most ``rel_error_bound``,
-returned by :func:`highlight_threshold`; 0.25 % for a 30-stop image with the default 8192
-bins) or, with ``method="exact"``, from a sort. Manual mode takes ``T`` directly.
+:func:`hdrjax.stats.percentile`'s fixed-grid histogram (relative error at most
+``rel_error_bound``, returned by :func:`highlight_threshold`: ``2^-10`` = 0.098 % with the
+default 8192 bins, whatever the dynamic range) or, with ``method="exact"``, from a sort.
+Manual mode takes ``T`` directly.
 
 Why before tone mapping (the default): the threshold and ``L_max`` are statistics of the
 physical luminances, as in the paper, where the step belongs to the HDR module. After a
@@ -67,7 +68,8 @@ def _over_batch(fn, lead: int, *arrays):
 def _threshold_one(L: Array, finite: Array | None, method: str, bins: int) -> tuple[Array, Array]:
     """2 × the luminance exceeded by 10 % of the finite pixels of one image (``finite``:
     their mask, ``None`` when every pixel is)."""
-    n_finite, n_pos, lo, hi = _positive_range(L, finite)
+    # finite is None: the clean branch of _clean_or_masked, every pixel is finite
+    n_finite, n_pos, lo, hi = _positive_range(L, finite, known_finite=finite is None)
     # percentile() ranks the positive pixels only. numpy.percentile's rank of the 90th
     # percentile among all n finite pixels is 0.9 (n − 1); the n − n_pos non-positive ones
     # come first, so among the positive ones it is rank_pos = n_pos − 1 − 0.1 (n − 1).
@@ -98,7 +100,8 @@ def highlight_threshold(
         rgb: linear RGB, channels last; leading axes are a batch.
         weights: luminance weights (Rec.709 by default).
         method: ``"histogram"`` (fast, error-bounded) or ``"exact"`` (sort, differentiable).
-        bins: histogram bins over ``[ln min, ln max]`` of the positive luminances.
+        bins: histogram resolution (:func:`hdrjax.stats.percentile`: ``2^(ceil(log2 bins)
+            − 3)`` bins per octave).
 
     Returns:
         ``(threshold, rel_error_bound)`` per image, in the image's luminance units; the bound

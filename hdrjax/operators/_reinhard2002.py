@@ -109,7 +109,8 @@ class Reinhard2002(AbstractLuminanceCurve):
         log_average: ``L̄_w`` in image units; ``None`` → measured with ``delta``.
         delta: offset inside the log-average (1e-6, HDR Toolbox; the seed uses 1e-5).
         percentile_method: ``"histogram"`` (fast, bounded error) or ``"exact"`` (sort).
-        bins: histogram bins for the percentiles.
+        bins: histogram resolution for the percentiles (:func:`hdrjax.stats.percentile`:
+            ``2^(ceil(log2 bins) − 3)`` bins per octave, 1024 by default).
         weights: luminance weights of the image's primaries (Rec.709 default).
     """
 

@@ -17,7 +17,7 @@ import io
 import json
 import os
 import tempfile
-from typing import Literal
+from typing import ClassVar, Literal
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -143,6 +143,8 @@ class Tabulated(AbstractLuminanceCurve):
         except Exception:  # traced values (fitting): checked by the caller's data
             return
         validate_table(lum, dis)
+
+    cheap_curve: ClassVar[bool] = False  # a table lookup: once per pixel, not per channel
 
     def _measure(self, p: Prepared) -> "Tabulated":
         return self

@@ -55,7 +55,7 @@ def dask_statistics(
     delta: float = DEFAULT_DELTA,
     bins: int = DEFAULT_BINS,
 ) -> LuminanceStats:
-    """:func:`hdrjax.tile.statistics` over a dask array's chunks (three computes)."""
+    """:func:`hdrjax.tile.statistics` over a dask array's chunks (one compute)."""
     darr, shape = _check_darr(darr)
     return measure_blocks(
         _run_blocks(darr), shape[0] * shape[1], darr.dtype, weights=weights, delta=delta, bins=bins
@@ -89,7 +89,7 @@ def to_dask(
             (the channel axis is put in one chunk).
         halo: overlap depth; default (and minimum) the step's own.
         stats: whole-image statistics for steps with global parameters; ``None`` computes
-            them now with :func:`dask_statistics` (three small computes).
+            them now with :func:`dask_statistics` (one compute over the chunks).
 
     Returns:
         A dask array of the result (float32, or float64 for float64 input under x64), same

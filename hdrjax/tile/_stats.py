@@ -1,16 +1,17 @@
 """First pass: whole-image luminance statistics from per-tile partial results.
 
 Reproduces :func:`hdrjax._stats.measure` (histogram percentiles) on an image read tile by
-tile, in three sub-passes over the tiles, because each needs the previous one's result:
+tile, in one sweep over the tiles: each tile gives its counts of finite and positive
+pixels, its extrema, ``Σ ln(δ + max(L, 0))`` and its histogram on the fixed float-bit-
+pattern grid of :func:`hdrjax._stats._histogram` (range independent, so tile histograms
+merge by plain addition and every pixel falls in the same bin as in the whole-image
+histogram). The percentiles and the trimmed log-average then come from the merged
+histogram through the same function as ``measure``'s.
 
-1. counts of finite and positive pixels, extrema, ``Σ ln(δ + max(L, 0))``;
-2. the histogram of ``ln L`` on the *global* grid ``[ln min_positive, ln max]`` with the
-   same bins, so every pixel falls in the same bin as in the whole-image histogram;
-3. the trimmed log-average's sum over the pixels ``≤ p99``.
-
-Counts, extrema, the histogram and hence ``p01``, ``p99`` and ``rel_error_bound`` equal
-``measure``'s bit for bit; the two log-averages are sums of per-tile float32 sums taken in
-float64, so they differ from the whole-image float32 reduction by float32 rounding only
+Counts, extrema, the histogram and ``rel_error_bound`` equal ``measure``'s bit for bit;
+``p01``, ``p99`` and the trimmed log-average are the same function of the same counts,
+compiled apart (a few ulp); the log-average is a sum of per-tile float32 sums taken in
+float64, so it differs from the whole-image float32 reduction by float32 rounding only
 (below 1e-5 relative; ``measure`` itself carries an error of that size).
 """
 
@@ -23,7 +24,17 @@ import numpy as np
 from jax import Array
 
 from .._colour import REC709_WEIGHTS, luminance
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, _hist_quantiles, accurate_sum
+from .._stats import (
+    DEFAULT_BINS,
+    DEFAULT_DELTA,
+    LuminanceStats,
+    _from_counts,
+    _histogram,
+    accurate_sum,
+    grid_size,
+    mantissa_bits,
+    rel_error_bound,
+)
 
 
 def stats_dtype(dtype) -> np.dtype:
@@ -69,45 +80,32 @@ def _pass1(block, *, weights, delta, dtype):
     )
 
 
-@functools.partial(jax.jit, static_argnames=("weights", "bins", "dtype"))
-def _pass2(block, lo, width, *, weights, bins, dtype):
-    Ls = _lum(block.astype(dtype), weights)
-    Lz, _, posf = _masks(Ls)
-    lnL = jnp.log(jnp.maximum(Lz, jnp.finfo(Lz.dtype).tiny))
-    # the index formula of hdrjax._stats._histogram_percentiles, on the global grid
-    idx = jnp.clip(((lnL - lo) / width).astype(jnp.int32), 0, bins - 1)
-    idx = idx + (1 - posf.astype(jnp.int32)) * bins
-    return jnp.zeros(bins, jnp.int32).at[idx.reshape(-1)].add(1, mode="drop")
+@functools.partial(jax.jit, static_argnames=("weights", "m", "dtype"))
+def _pass_hist(block, *, weights, m, dtype):
+    Ls = _lum(block.astype(dtype), weights)  # NaN at non-finite pixels: outside the grid
+    return _histogram(Ls, None, m)
 
 
-@functools.partial(jax.jit, static_argnames=("weights", "dtype"))
-def _pass3(block, p99, *, weights, dtype):
-    Ls = _lum(block.astype(dtype), weights)
-    Lz, _, posf = _masks(Ls)
-    lnL = jnp.log(jnp.maximum(Lz, jnp.finfo(Lz.dtype).tiny))
-    keptf = posf * (Lz <= p99).astype(Lz.dtype)
-    return jnp.sum(keptf.astype(jnp.int32)), accurate_sum(lnL * keptf)
-
-
-@functools.partial(jax.jit, static_argnames=("bins",))
-def _grid(minpos, lmax, n_pos, *, bins):
-    """``lo``, ``hi`` and the bin width exactly as ``measure`` derives them."""
+@functools.partial(jax.jit, static_argnames=("m",))
+def _percentiles(counts, minpos, lmax, n_pos, *, m):
+    """``p01``, ``p99``, the bound and the trimmed log-average exactly as ``measure``."""
+    dt = minpos.dtype
     any_pos = n_pos > 0
-    lo = jnp.log(minpos)
-    hi = jnp.log(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0))
-    lo = jnp.where(any_pos, lo, 0.0)
-    hi = jnp.where(any_pos, hi, 0.0)
-    return lo, hi, jnp.maximum(hi - lo, 1e-20) / bins
+    mx = jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)
+    qs = jnp.array([0.01, 0.99], dt)
+    vals, n_kept, kept_sum = _from_counts(counts, qs, minpos, mx, m)
+    vals = jnp.where(any_pos, vals, 1.0)
+    err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
+    trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1e-30))
+    return vals, err, jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
 
 
-@jax.jit
-def _percentiles(counts, lo, hi, width, n_pos):
-    qs = jnp.array([0.01, 0.99], lo.dtype)
-    vals = jnp.clip(_hist_quantiles(counts, lo, width, qs), jnp.exp(lo), jnp.exp(hi))
-    any_pos = n_pos > 0
-    vals = jnp.where(any_pos, vals, jnp.nan)
-    err = jnp.where(any_pos, jnp.expm1(width), 0.0)
-    return jnp.where(any_pos, vals, 1.0), err
+def _sweep(block, *, weights, delta, m, dtype):
+    """Every per-tile result, from one visit of the tile: ``(_pass1, histogram)``."""
+    return (
+        _pass1(block, weights=weights, delta=delta, dtype=dtype),
+        _pass_hist(block, weights=weights, m=m, dtype=dtype),
+    )
 
 
 Runner = Callable[[Callable, tuple, dict], list]
@@ -127,14 +125,16 @@ def measure_blocks(
     delta: float = DEFAULT_DELTA,
     bins: int = DEFAULT_BINS,
 ) -> LuminanceStats:
-    """Merge per-block partial results (``run`` visits every block once per sub-pass)."""
+    """Merge per-block partial results (``run`` visits every block once)."""
     if isinstance(bins, bool) or int(bins) != bins or bins < 2:
         raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
     bins = int(bins)
     w = REC709_WEIGHTS if weights is None else tuple(float(v) for v in weights)
     dt = stats_dtype(dtype)
     big = float(np.finfo(dt).max)
-    p1 = run(_pass1, (), dict(weights=w, delta=float(delta), dtype=dt))
+    m = mantissa_bits(bins)
+    parts = run(_sweep, (), dict(weights=w, delta=float(delta), m=m, dtype=dt))
+    p1 = [p[0] for p in parts]
     n_fin = sum(int(p[0]) for p in p1)
     n_pos = sum(int(p[1]) for p in p1)
     lmin = min((dt.type(p[2]) for p in p1), default=dt.type(big))
@@ -145,15 +145,12 @@ def measure_blocks(
         lmin, lmax = dt.type(0), dt.type(0)
     if n_pos == 0:
         minpos = dt.type(1)
-    lo, hi, width = _grid(jnp.asarray(minpos, dt), jnp.asarray(lmax, dt), n_pos, bins=bins)
-    counts = np.zeros(bins, np.int64)
-    for c in run(_pass2, (lo, width), dict(weights=w, bins=bins, dtype=dt)):
-        counts += np.asarray(c, np.int64)
-    (p01, p99), err = _percentiles(jnp.asarray(counts, jnp.int32), lo, hi, width, n_pos)
-    p3 = run(_pass3, (p99,), dict(weights=w, dtype=dt))
-    n_kept = sum(int(p[0]) for p in p3)
-    kept_sum = float(np.sum([np.float64(p[1]) for p in p3]))
-    trimmed = np.exp(kept_sum / max(n_kept, 1)) if n_kept > 0 else 1.0
+    counts = np.zeros(grid_size(m), np.int64)
+    for p in parts:
+        counts += np.asarray(p[1], np.int64)
+    (p01, p99), err, trimmed = _percentiles(
+        jnp.asarray(counts, jnp.int32), jnp.asarray(minpos, dt), jnp.asarray(lmax, dt), n_pos, m=m
+    )
     i32 = jnp.int32
     return LuminanceStats(
         n_pixels=jnp.asarray(n_pixels, i32),
@@ -165,7 +162,7 @@ def measure_blocks(
         log_average=jnp.asarray(np.exp(log_sum / max(n_fin, 1)), dt),
         p01=p01,
         p99=p99,
-        log_average_trimmed=jnp.asarray(trimmed, dt),
+        log_average_trimmed=trimmed,
         rel_error_bound=err,
     )
 
