@@ -182,3 +182,42 @@ def test_exact_reference_match_is_a_success_with_finite_sensitivity():
     assert bool(res.success)
     np.testing.assert_allclose(float(res.params["L_max"]), 8.0, rtol=1e-5)
     assert np.all(np.isfinite(np.asarray(res.jacobian["L_max"])))
+
+
+def test_default_solver_agrees_with_minpack_on_a_numpy_model(cornell, x64):
+    # the benchmark's problem (benchmarks/bench_fit.py) on the Cornell box: reinhard2002's
+    # key and L_white so that mean display luminance is 0.2 and P99 0.95, from key 0.18,
+    # L_white 10, in ln p; the peer is scipy's MINPACK on a NumPy model of the operator
+    # (JGT 2002 Eqs. 2–4, colour scaled by L_d / L_w) and of the two statistics
+    import scipy.optimize
+
+    w = np.asarray(hdrjax.REC709_WEIGHTS)
+    lbar = float(np.exp(np.mean(np.log(1e-6 + np.maximum(cornell @ w, 0)))))
+
+    def stats(z):
+        key, white = np.exp(z)
+        L = cornell @ w
+        Ls = key / lbar * L
+        Ld = Ls / (1 + Ls) * (1 + Ls / white**2)
+        disp = cornell * np.where(L > 0, Ld / np.where(L > 0, L, 1), 0)[..., None]
+        Lc = np.clip(disp, 0, 1) @ w
+        return np.array([Lc.mean(), np.percentile(Lc[Lc > 0], 99)])
+
+    want = np.array([0.2, 0.95])
+    sol = scipy.optimize.least_squares(
+        lambda z: stats(z) - want, np.log([0.18, 10.0]), method="lm", xtol=1e-12, ftol=1e-12
+    )
+    assert sol.success and np.sum(sol.fun**2) < 1e-20
+    start = hdrjax.make_operator("reinhard2002", key=0.18, L_white=10.0, log_average=lbar)
+    res = hf.fit(
+        start,
+        jnp.asarray(cornell),
+        ht.MeanLuminance(0.2) + ht.Percentiles(99, 0.95),
+        params=("key", "L_white"),
+        max_size=None,
+    )
+    assert bool(res.success) and float(res.loss) < 1e-20
+    np.testing.assert_allclose(
+        [float(res.params["key"]), float(res.params["L_white"])], np.exp(sol.x), rtol=1e-6
+    )
+    np.testing.assert_allclose(res.statistics, want, rtol=1e-8)
