@@ -68,16 +68,20 @@ flat-topped one whose brightest local maximum is on its rim) becomes several lig
 most ``max_lights`` lights, ``max_candidates`` candidates and ``4 max_lights`` kept
 candidates (``truncated`` says when a cap was hit).
 
-Speed (XLA:CPU; every choice keeps the results of the plain formulation, bit for bit on
-the test and benchmark maps): the window maximum of step 5 is separable (a column-wise
+Speed (XLA:CPU; every choice keeps the results of the plain formulation: counts, labels
+and samples bit for bit on the test and benchmark maps, the light statistics up to float
+rounding of reordered sums): the window maximum of step 5 is separable (a column-wise
 maximum over the window's rows, computed once per map, then one value per window column
 and sample); step 8 tests only the pairs ``i < j`` the greedy merge reads; step 9 reads
 each light-window row as one slice (rows across the seam from a strip of the columns
 around it, no padded copy of the map), grows the masks bit-packed (32 rows to a word),
-and resolves pixels two lights reach by a scatter-min of window rows; the median of the
-automatic threshold comes from ``lax.top_k``. A single map (no batch axis) is not
-vmapped, so that steps 8 and 9 branch on the data: with at most ``SMALL_REPS`` kept
-candidates or ``SMALL_LIGHTS`` lights (most maps) they run on those sizes only.
+resolves pixels two lights reach by a scatter-min of window rows, sums each light's
+statistics along the window rows by one matrix product (per-column weights: 1, the
+column offset, cos/sin of the azimuth offset) and then over the rows, and writes the
+label image by a scatter of each light's owned pixels; the median of the automatic
+threshold sorts the luminances' bit patterns as integers. A single map (no batch axis)
+is not vmapped, so that steps 8 and 9 branch on the data: with at most ``SMALL_REPS``
+kept candidates or ``SMALL_LIGHTS`` lights (most maps) they run on those sizes only.
 """
 
 import dataclasses
@@ -469,11 +473,16 @@ def _grow(filled: Array, above: Array, limit: int) -> tuple[Array, Array]:
 
     above_p = pack(above)
     zeros = jnp.zeros_like(above_p)
-    fill, count, _, _ = jax.lax.while_loop(
-        lambda s: s[3] & (s[2] < limit),
-        step,
-        (pack(filled), (zeros,) * bits, jnp.int32(0), jnp.bool_(True)),
-    )
+    # first up to 31 steps with a 5-plane counter (most lights stop there), then the rest
+    # with all planes: the counter is most of a step's kernels
+    b1 = min(bits, 5)
+    state = (pack(filled), (zeros,) * b1, jnp.int32(0), jnp.bool_(True))
+    state = jax.lax.while_loop(lambda s: s[3] & (s[2] < min(limit, 2**b1 - 1)), step, state)
+    if b1 < bits:
+        fill, count, i, more = state
+        state = (fill, count + (zeros,) * (bits - b1), i, more)
+        state = jax.lax.while_loop(lambda s: s[3] & (s[2] < limit), step, state)
+    fill, count, _, _ = state
     # unpack: row y is bit y % 32 of word y // 32
     rows = np.arange(ny)
     word = jnp.asarray(rows // 32)
@@ -537,12 +546,17 @@ def _compact(mask: Array, size: int) -> tuple[Array, Array, Array]:
 
 
 def _median(x: Array) -> Array:
-    """``jnp.median`` of a 1-D array without NaN, from ``lax.top_k`` (XLA:CPU's full sort
-    took ~5x longer): the mean of the order statistics ``⌊(n−1)/2⌋`` and ``⌈(n−1)/2⌉``."""
+    """``jnp.median`` of a 1-D array of luminances (≥ 0, no NaN): the mean of the order
+    statistics ``⌊(n−1)/2⌋`` and ``⌈(n−1)/2⌉``.
+
+    Sorted as integers: the bit patterns of floats ≥ 0 are ordered as their values (−0
+    is mapped to +0), and XLA:CPU sorts integers ~3x faster than floats (its float sort
+    and ``lax.top_k`` use a NaN-aware comparator)."""
     n = x.shape[0]
-    lo, hi = (n - 1) // 2, n // 2
-    top = jax.lax.top_k(x, n - lo)[0]  # largest first: top[n - 1 - i] is the i-th smallest
-    return (top[n - 1 - lo] + top[n - 1 - hi]) * 0.5
+    it = {4: jnp.int32, 8: jnp.int64}[x.dtype.itemsize]
+    keys = jnp.sort(jnp.maximum(jax.lax.bitcast_convert_type(x, it), 0))
+    lo, hi = (jax.lax.bitcast_convert_type(keys[i], x.dtype) for i in ((n - 1) // 2, n // 2))
+    return (lo + hi) * 0.5
 
 
 def _threshold(top: Array, sample_vals: Array, thr: Array) -> Array:
@@ -823,8 +837,8 @@ def _find(
         filled, dist = _grow(seeds & above, above, big)
         # a pixel two lights reach goes to the nearer (geodesic steps), then the brighter: the
         # smallest key, by a scatter-min of the window rows into an image padded by rx_
-        # columns each side (padded column j is column j − rx_); on the sphere the padding
-        # columns are then folded into the columns they stand for, and copied back
+        # columns each side (padded column j is column j − rx_); on the sphere the columns
+        # that stand for the same one (j and j + W, j < 2 rx_) then get their minimum
         # key = (dist, k) packed in bits: k is its low bits (a mask, not a division)
         kbits = max(1, (K - 1).bit_length())
         kk = jnp.arange(K, dtype=jnp.int32)[:, None, None]
@@ -843,47 +857,58 @@ def _find(
         )
         r = rx_
         if plan.sphere:
-            left = jnp.minimum(lab[:, r : 2 * r], lab[:, W + r :])
-            right = jnp.minimum(lab[:, W : W + r], lab[:, :r])
-            lab = jnp.concatenate([left, lab[:, 2 * r : W], right], axis=1)
-            padded = jnp.concatenate([lab[:, W - r :], lab, lab[:, :r]], axis=1)
-        else:
-            padded, lab = lab, lab[:, r : r + W]
-        own = filled & (_row_slices(padded, Y, x0, PX) == key)
-        lab = jnp.where(lab < none, lab & ((1 << kbits) - 1), -1)
+            seam = jnp.minimum(lab[:, : 2 * r], lab[:, W:])
+            lab = jnp.concatenate([seam, lab[:, 2 * r : W], seam], axis=1)
+        own = filled & (_row_slices(lab, Y, x0, PX) == key)
 
-        # light properties from its pixels
-        dw = domega[Y][..., None] * own
-        wgt = Lw * dw
-        energy = jnp.sum(wgt, axis=(1, 2))
-        omega = jnp.sum(dw, axis=(1, 2))
-        rgb_w_ = window("rgb", rgb_w)
-        # per channel: one reduction over a (..., 3) axis ran several times slower
-        rgb_sum = jnp.stack([jnp.sum(dw * rgb_w_[..., c], axis=(1, 2)) for c in range(3)], -1)
+        def fold(raw: Array) -> Array:
+            """The padded image's columns ``r … r + W − 1`` (on the sphere the padding is
+            folded in by a maximum: no two lights own a pixel, −1 elsewhere)."""
+            if not plan.sphere:
+                return raw[:, r : r + W]
+            left = jnp.maximum(raw[:, r : 2 * r], raw[:, W + r :])
+            right = jnp.maximum(raw[:, W : W + r], raw[:, :r])
+            return jnp.concatenate([left, raw[:, 2 * r : W], right], axis=1)
+
+        # light properties from its pixels: first summed along each window row, as one
+        # matrix product with per-column weights (1, the column offset, cos and sin of its
+        # azimuth from the row's centre column x0), then over the rows with per-row
+        # weights (dω, sin/cos of elevation and of x0's azimuth); ~10 reductions over the
+        # whole windows cost several times more
+        ownf = own.astype(dt)
+        offs = np.arange(-rx_, rx_ + 1)
+        ang = offs * (2 * np.pi / W)
+        colw = jnp.asarray(np.stack([np.ones(PX), offs, np.cos(ang), np.sin(ang)], 1), dt)
+        A = ((Lw * ownf).reshape(K * PY, PX) @ colw).reshape(K, PY, 4)
+        n_row = jnp.sum(ownf, axis=-1)  # (K, PY)
+        rgb_w_ = window("rgb", rgb_w)  # (K, PY, PX, 3)
+        csum = (
+            (ownf[..., None] * rgb_w_).reshape(K * PY, PX * 3)
+            @ jnp.asarray(np.tile(np.eye(3), (PX, 1)), dt)
+        ).reshape(K, PY, 3)
+        dom = domega[Y]  # (K, PY)
+        de = dom * A[..., 0]  # each row's energy
+        energy = jnp.sum(de, axis=1)
+        omega = jnp.sum(dom * n_row, axis=1)
+        rgb_sum = jnp.sum(dom[..., None] * csum, axis=1)
         safe_omega = jnp.where(omega > 0, omega, 1.0)
         colour = rgb_sum / safe_omega[:, None]
         mean_lum = energy / safe_omega
-        n_pix = jnp.sum(own, axis=(1, 2))
+        n_pix = jnp.sum(n_row, axis=1).astype(jnp.int32)
         lvalid = lvalid & (n_pix > 0) & (energy > 0)
         peak = jnp.max(jnp.where(own, window("peak", L_peak), 0), axis=(1, 2))
         total = smooth["total"]
         share = energy / jnp.where(total > 0, total, 1.0)
         scale_x, scale_y = plan.in_w / W, plan.in_h / H
         if plan.sphere:
-            # sin/cos of each window pixel's azimuth: slices of the column-padded tables
-            r = rx_
-            ca_w, sa_w = (
-                _row_slices(
-                    jnp.asarray(np.concatenate([a[W - r :], a, a[:r]]), dt)[None], 0 * Y, x0, PX
-                )
-                for a in _col_geometry(W)
-            )
-            wc = wgt * ce[Y][..., None]
+            # azimuth of column x0 + o: az(x0) + o·2π/W (sin/cos by the angle sum)
+            dc = dom * ce[Y]
+            c0, s0 = ca[x0], sa[x0]
             vec = jnp.stack(
                 [
-                    jnp.sum(wc * sa_w, (1, 2)),
-                    jnp.sum(wgt * se[Y][..., None], (1, 2)),
-                    -jnp.sum(wc * ca_w, (1, 2)),
+                    jnp.sum(dc * (s0 * A[..., 2] + c0 * A[..., 3]), axis=1),
+                    jnp.sum(de * se[Y], axis=1),
+                    -jnp.sum(dc * (c0 * A[..., 2] - s0 * A[..., 3]), axis=1),
                 ],
                 axis=-1,
             )
@@ -896,14 +921,15 @@ def _find(
         # trigonometry here: XLA:CPU compiles each transcendental into a large kernel; the
         # azimuth, elevation and angular size are computed from these on demand)
         safe_e = jnp.where(energy > 0, energy, 1.0)
-        cxw = wx.astype(dt) + jnp.sum(wgt * offx.astype(dt)[None, None, :], axis=(1, 2)) / safe_e
+        cxw = wx.astype(dt) + jnp.sum(dom * A[..., 1], axis=1) / safe_e
         cxw = jnp.mod(cxw + 0.5, W) - 0.5 if plan.sphere else cxw
-        cyw = jnp.sum(wgt * Y[..., None], axis=(1, 2)) / safe_e
+        cyw = jnp.sum(de * Y, axis=1) / safe_e
         pixel = jnp.stack([(cxw + 0.5) * scale_x - 0.5, (cyw + 0.5) * scale_y - 0.5], axis=-1)
         peak_pixel = jnp.stack([(sxk + 0.5) * scale_x - 0.5, (syk + 0.5) * scale_y - 0.5], -1)
 
         # samples: which light holds each candidate's local maximum
-        clab = jnp.where(cvalid, lab.reshape(-1)[cflat], -1)
+        cl = lab.reshape(-1)[cy * (W + 2 * r) + cx + r]
+        clab = jnp.where(cvalid & (cl < none), cl & ((1 << kbits) - 1), -1)
         n_samples = jnp.sum(clab[None, :] == jnp.arange(K)[:, None], axis=1)
 
         # largest energy first; relabel
@@ -915,6 +941,21 @@ def _find(
         def relabel(a: Array) -> Array:
             b = jnp.where(a >= 0, inv[jnp.maximum(a, 0)], -1)
             return jnp.where(b < count, b, -1).astype(jnp.int32)
+
+        # the label image: each light's new label scattered over the pixels it owns (a
+        # relabel pass over the whole image cost more)
+        new_lab = jnp.where(own, relabel(jnp.arange(K, dtype=jnp.int32))[:, None, None], -1)
+        labels = jax.lax.scatter_max(
+            jnp.full((H, W + 2 * rx_), -1, jnp.int32),
+            jnp.stack([Y.reshape(-1), x0.reshape(-1)], axis=-1),
+            new_lab.reshape(K * PY, PX),
+            jax.lax.ScatterDimensionNumbers(
+                update_window_dims=(1,),
+                inserted_window_dims=(0,),
+                scatter_dims_to_operand_dims=(0, 1),
+            ),
+            mode=jax.lax.GatherScatterMode.PROMISE_IN_BOUNDS,
+        )
 
         # one packed table, one gather: each separate output array is a kernel XLA compiles
         fields = {
@@ -945,7 +986,7 @@ def _find(
             count=count.astype(jnp.int32),
             valid=jnp.pad(lvalid, (0, pad)),
             **out,
-            labels=relabel(lab).reshape(H, W),
+            labels=fold(labels),
             sample_light=relabel(clab),
         )
 

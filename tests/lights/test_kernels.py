@@ -83,6 +83,35 @@ def test_bit_packed_growth_matches_breadth_first_search(ny):
         np.testing.assert_array_equal(dist[k][ref_fill], ref_dist[ref_fill])
 
 
+def test_bit_packed_growth_long_path_past_the_first_counter():
+    """A serpentine (one connector per odd row, alternate ends): geodesic distances up to
+    ~120 steps, past the 31 steps of the first, 5-plane counter; against a breadth-first
+    search (scipy binary dilation, one ring per step)."""
+    ny, nx = 9, 23
+    above = np.zeros((ny, nx), bool)
+    above[0::2] = True
+    for i, y in enumerate(range(1, ny, 2)):
+        above[y, nx - 1 if i % 2 == 0 else 0] = True
+    seeds = np.zeros_like(above)
+    seeds[0, 0] = True
+    fill, dist = (
+        np.asarray(a)[0]
+        for a in jax.jit(L._grow, static_argnums=2)(seeds[None], above[None], 10_000)
+    )
+    cur, ref = seeds.copy(), np.where(seeds, 0, -1)
+    step = 0
+    while True:
+        step += 1
+        new = ndimage.binary_dilation(cur, np.ones((3, 3), bool)) & above & ~cur
+        if not new.any():
+            break
+        ref[new] = step
+        cur |= new
+    np.testing.assert_array_equal(fill, above)
+    np.testing.assert_array_equal(dist[above], ref[above])
+    assert ref.max() > 100
+
+
 def test_window_rows_wrap_across_the_seam():
     """Slices of window rows (inner rows and rows across the seam) = modular indexing."""
     rng = np.random.default_rng(3)
@@ -97,6 +126,14 @@ def test_window_rows_wrap_across_the_seam():
 
 
 @pytest.mark.parametrize("n", [1, 2, 7, 786, 787])
-def test_median_from_top_k(n):
+def test_median_from_integer_sort(n):
     x = np.random.default_rng(n).integers(0, 50, n).astype(np.float32)  # ties
     assert float(L._median(jnp.asarray(x))) == np.median(x)
+
+
+def test_median_signed_zero_inf_float64(x64):
+    x = np.array([0.0, -0.0, 3.0, np.inf, 1.0, -0.0], np.float32)
+    assert float(L._median(jnp.asarray(x))) == np.median(x) == 0.5
+    y = np.random.default_rng(3).random(101) * 1e3
+    assert L._median(jnp.asarray(y)).dtype == jnp.float64
+    assert float(L._median(jnp.asarray(y))) == np.median(y)
