@@ -70,6 +70,13 @@ def call(fn: Callable, static: tuple[str, ...], *args, **kwargs):
     return compiled(fn, static, top and jax.default_backend() == "cpu")(*args, **kwargs)
 
 
+def eager_cpu(x: Array) -> bool:
+    """Whether ``x`` is a concrete array (not being traced) and XLA runs on the CPU: there,
+    a filter may split its work into several compiled stages (``SMALL_PIXELS`` in
+    ``_median_core``); inside a caller's ``jit``, ``vmap`` or ``grad`` it is one computation."""
+    return not isinstance(x, jax.core.Tracer) and jax.default_backend() == "cpu"
+
+
 def map_planes(fn: Callable[[Array], Array], x: Array, lead: int) -> Array:
     """Apply ``fn`` to every (H, W) plane: the ``lead`` leading axes are batch axes."""
     if lead == 0:

@@ -24,7 +24,9 @@ Edges: ``mode`` as in SciPy — ``"nearest"`` (replicate, the default), ``"refle
 ``"mirror"``, ``"wrap"``. Each pass is a k×k filter; ``passes`` repeats it.
 
 Speed: windows up to 7×7 use comparator networks (min/max on order-preserving integer
-keys, two rows' medians sharing one network) over row strips; larger windows find the
+keys, two rows' medians sharing one network) over row strips; a single plane of up to
+2²¹ pixels called eagerly on the CPU skips the strips (the whole interior in one kernel,
+then the edges: ~45 kernel launches instead of ~280 at 1366×768); larger windows find the
 median bit by bit (32 compare-and-count rounds of k² per pixel), which compiles in about a
 second for any k where a 15×15 network would take minutes. See
 ``benchmarks/bench_filters.py`` and the README for measured ratios to OpenCV and SciPy.
@@ -48,11 +50,19 @@ from ._api import (
     check_passes,
     check_size,
     check_strip_rows,
+    eager_cpu,
     float_image,
     map_channels,
 )
 from ._keys import to_key
-from ._median_core import argmedian_plane, median_plane
+from ._median_core import (
+    NETWORK_MAX,
+    SMALL_PIXELS,
+    argmedian_plane,
+    median_finish,
+    median_pairs,
+    median_plane,
+)
 from ._strips import check_mode, padded_block
 from ._vector_core import argvector_plane
 
@@ -149,8 +159,9 @@ def median_filter(
         mode: edge handling; ``"nearest"`` replicates the edge pixels.
         weights: luminance weights for ``"luminance"`` (Rec.709 by default).
         channel_axis: ``-1`` for channels last, ``None`` for planes.
-        strip_rows: rows per strip (default: about 256 KiB of keys); results do not depend
-            on it, only speed and the size of temporaries.
+        strip_rows: rows per strip (default: about 256 KiB of keys, and no strips for a
+            single plane of up to 2²¹ pixels); results do not depend on it, only speed and
+            the size of temporaries.
 
     Returns:
         The filtered image, same shape, float32 (float64 for float64 input under x64).
@@ -176,6 +187,18 @@ def median_filter(
     w = None if weights is None else tuple(float(v) for v in weights)
     if size == 1 or passes == 0:
         return x
+    if (
+        planes
+        and x.ndim == 2
+        and passes == 1
+        and rows is None
+        and size <= NETWORK_MAX
+        and 4096 < x.size <= SMALL_PIXELS
+        and min(x.shape) > size
+        and eager_cpu(x)
+    ):  # one small plane: two compiled stages, no strips (same values)
+        pairs = call(median_pairs, ("k",), x, k=size)
+        return call(median_finish, ("k", "mode"), pairs, x, k=size, mode=mode)
     return call(
         _median_impl,
         _STATIC,

@@ -39,6 +39,13 @@ NETWORK_MAX = 7
 """Largest window done with comparator networks; larger ones use :mod:`._radix` (a 9×9
 network takes ~10 s to compile, 15×15 minutes)."""
 
+SMALL_PIXELS = 1 << 21
+"""Largest plane (pixels) that an eager call filters in two compiled stages, without strips
+(:func:`median_pairs`, then :func:`median_finish`): no strip loop and no zero-filled
+output, ~45 kernel launches per call instead of ~280 at 1366×768 (XLA splits each across
+its threads), for one plane-sized temporary. Larger planes, and calls being traced, use
+the strip engine; the values are the same."""
+
 
 @functools.cache
 def pixel_network(k: int) -> tuple[Network, int]:
@@ -227,6 +234,41 @@ def median_plane(x: Array, k: int, mode: str, rows: int | None = None) -> Array:
     return _engine(
         x.shape, k, rows, strip_keys, block_keys, lambda kk: from_key(kk, x.dtype), x.dtype
     )
+
+
+def median_pairs(x: Array, k: int) -> Array:
+    """Stage 1 of the two-stage schedule for small planes (k ≤ :data:`NETWORK_MAX`,
+    more than ``k`` rows and columns): :func:`pair_network` over the interior, all at once
+    (no strips, no loop) → ``(P, W − 2r)`` complex, the medians of interior rows
+    ``r, r + 2, ...`` in the real part and of the rows after them in the imaginary part,
+    ``P = (H − 2r) // 2``.
+
+    Compiled apart from :func:`median_finish` because XLA would fuse the network into the
+    unpacking (which reads each pair twice) and run it twice. Each output is the exact
+    median of its window, so the result is bit-identical to :func:`median_plane`.
+    """
+    h, w = x.shape
+    r = k // 2
+    a, b = _pair_keys(to_key(x), k, (h - 2 * r) // 2, w - 2 * r)
+    return jax.lax.complex(_as_float(from_key(a, x.dtype)), _as_float(from_key(b, x.dtype)))
+
+
+def median_finish(pairs: Array, x: Array, k: int, mode: str) -> Array:
+    """Stage 2: the ``(H, W)`` median plane from :func:`median_pairs` and the edge bands
+    (per-pixel network on edge-mapped copies of their inputs, as in the strip engine)."""
+    h, w = x.shape
+    r = k // 2
+    b0 = r + 2 * pairs.shape[0]  # first row of the bottom band
+    bands = [(0, r, 0, w), (b0, h, 0, w), (r, b0, 0, r), (r, b0, w - r, w)]
+
+    def block_keys(r0, r1, c0, c1):
+        return to_key(padded_block(x, r, mode, r0, r1, c0, c1))
+
+    vals = _bands(block_keys, k, bands, lambda kk: from_key(kk, x.dtype))
+    out = jax.lax.pad(_unpack(pairs, x.dtype), jnp.zeros((), x.dtype), [(r, h - b0, 0), (r, r, 0)])
+    for (r0, _, c0, _), v in zip(bands, vals, strict=True):
+        out = jax.lax.dynamic_update_slice(out, v, (r0, c0))
+    return out
 
 
 def argmedian_plane(lum: Array, k: int, mode: str, rows: int | None = None) -> Array:
