@@ -235,8 +235,7 @@ def percentile_curve(imgs: dict[str, np.ndarray], bins: tuple[int, ...], repeats
     settings: list[tuple[str, str, int]] = [("exact", "exact", 2)]
     # ``bins`` sets the fixed grid's bins per octave: 2^mantissa_bits(bins) (1024 for 8192)
     settings += [
-        (f"histogram {b} bins ({2 ** stats.mantissa_bits(b)}/octave)", "histogram", b)
-        for b in bins
+        (f"histogram {b} bins ({2 ** stats.mantissa_bits(b)}/octave)", "histogram", b) for b in bins
     ]
     errs: dict[str, dict[str, float]] = {s[0]: {} for s in settings}
     bounds: dict[str, list[float]] = {s[0]: [] for s in settings}
