@@ -40,9 +40,6 @@ MAX_DIM = 1 << 20
 _HEADER_LIMIT = 1 << 16
 _BLOCK_BYTES = 1 << 21  # input bytes expanded per step (cache-sized temporaries)
 _HEAD = np.arange(256, dtype=np.int64)  # RLE header byte values (see _rle_plan)
-_POS_BITS = 40  # _rle_plan's walk state: (pixels << _POS_BITS) | byte position
-_POS_MASK = (1 << _POS_BITS) - 1
-_CHUNK = 8  # walk steps between checks for finished scanlines
 _RES_RE = re.compile(rb"^([-+])([XY]) +(\d+) +([-+])([XY]) +(\d+)\s*$")
 
 # value of mantissa m with exponent e: m * 2**(e - 136); e = 0 means zero.
@@ -171,49 +168,39 @@ def _rle_plan(buf: np.ndarray, nscan: int, length: int, name: str) -> tuple[np.n
         raise ReadError(f"{name}: corrupt Radiance run-length data at scanline 0")
     k = cand.size
     target = 4 * length
-    # One run header per step for every candidate at once (small files are dominated by
-    # the number of NumPy calls per step). Header byte h stands for mag[h] pixels and the
-    # next header is adv[h] bytes on; h = 0 is invalid and gets a count past the end of
-    # any scanline, so its walk ends at once as not exact.
+    # One run header per step for every candidate at once; the per-step work is kept to a
+    # few NumPy calls (small files are dominated by their count). Header byte h stands for
+    # MAG[h] pixels and the next header is ADV[h] bytes on; h = 0 is invalid and gets a
+    # count past the end of any scanline, so its walk ends at once as not exact. Positions
+    # past the data read its last byte; such walks end past the data and are refused below.
     mag = np.where(_HEAD < 128 + 1, _HEAD, _HEAD - 128)
     mag[0] = target + 1
     adv = np.where(_HEAD > 128, 2, 1 + _HEAD)
-    # A walk's state is one int64, (pixels so far << 40) | byte position, so a step is a
-    # single table add. Positions at or past the end of the data read a 0 byte, which ends
-    # the walk as not exact. Walks are checked every _CHUNK steps; a finished walk takes a few
-    # extra steps (its records past the end are told apart by their pixel count).
-    step = (mag << _POS_BITS) + adv
-    padded = np.concatenate([buf, np.zeros(1, np.uint8)])
+    last = n - 1
     ids = np.arange(k)
-    state = cand + 4
+    p = cand + 4
+    f = np.zeros(k, np.int64)  # pixels decoded so far in this scanline (4 components)
     ends = np.full(k, -1, np.int64)
-    rec_s: list[np.ndarray] = []
+    rec_p: list[np.ndarray] = []
+    rec_f: list[np.ndarray] = []
     rec_c: list[np.ndarray] = []
     budget = 16 * nscan * length + (1 << 20)  # work bound: linear in the image size
     while ids.size:
-        budget -= _CHUNK * ids.size
+        budget -= ids.size
         if budget < 0:
             raise ReadError(f"{name}: corrupt Radiance run-length data (runaway decoding)")
-        chunk = np.empty((_CHUNK + 1, ids.size), np.int64)
-        chunk[0] = state
-        for j in range(_CHUNK):
-            state = state + step[padded[np.minimum(state & _POS_MASK, n)]]
-            chunk[j + 1] = state
-        rec_s.append(chunk[:-1].reshape(-1))
-        rec_c.append(np.broadcast_to(ids, (_CHUNK, ids.size)).reshape(-1))
-        over = (chunk >> _POS_BITS) >= target
-        done = over[-1]
+        h = buf[np.minimum(p, last)]
+        rec_p.append(p)
+        rec_f.append(f)
+        rec_c.append(ids)
+        f = f + mag[h]
+        p = p + adv[h]
+        done = f >= target
         if done.any():
-            first = np.argmax(over[:, done], axis=0)  # the step that crossed the end
-            fin = chunk[first, np.flatnonzero(done)]
-            pos = fin & _POS_MASK
-            exact = ((fin >> _POS_BITS) == target) & (pos <= n)
-            ends[ids[done][exact]] = pos[exact]
-            ids, state = ids[~done], state[~done]
-    all_s = np.concatenate(rec_s)
-    live = (all_s >> _POS_BITS) < target  # a record before its walk's end: a run header
-    all_s = all_s[live]
-    all_c = np.concatenate(rec_c)[live]
+            exact = done & (f == target) & (p <= n)
+            ends[ids[exact]] = p[exact]
+            keep = ~done
+            ids, p, f = ids[keep], p[keep], f[keep]
     # the chain of real scanlines (one Python step per scanline)
     idx_of = dict(zip(cand.tolist(), range(k), strict=True))
     chain = np.empty(nscan, np.int64)
@@ -229,11 +216,13 @@ def _rle_plan(buf: np.ndarray, nscan: int, length: int, name: str) -> tuple[np.n
         starts[row] = at
         at = int(ends[i])
     starts[nscan] = at
+    all_p = np.concatenate(rec_p)
+    all_f = np.concatenate(rec_f)
     if k > nscan:  # drop the records of false candidates
         on_chain = np.zeros(k, bool)
         on_chain[chain] = True
-        all_s = all_s[on_chain[all_c]]
-    all_p, all_f = all_s & _POS_MASK, all_s >> _POS_BITS
+        keep = on_chain[np.concatenate(rec_c)]
+        all_p, all_f = all_p[keep], all_f[keep]
     heads_b = buf[all_p].astype(np.int64)
     cnt = mag[heads_b]
     # a run or literal must not straddle the end of a component (a multiple of length)
