@@ -260,13 +260,17 @@ def _res(shape) -> str:
     return f"{shape[1]}x{shape[0]}"
 
 
-def fit_pair(case, method, rgb, x, max_size, kind="percentile", repeats=(7, 7), **common):
+def fit_pair(
+    case, method, rgb, x, max_size, kind="percentile", repeats=(7, 7), lbar=None, **common
+):
     """Time one fit on both sides (hdrjax on ``x``, the scipy peer on ``rgb``) and record
-    steps, loss, convergence and the fitted parameters of each."""
+    steps, loss, convergence and the fitted parameters of each. ``lbar``: reinhard2002's
+    log-average given to both sides (not measured)."""
     names = tuple(n for n, _ in START[method])
     start = [v for _, v in START[method]]
-    t = H.measure(lambda: hdrjax_fit(method, x, max_size, kind), repeats[0])
-    res = hdrjax_fit(method, x, max_size, kind)
+    fixed = {"log_average": lbar} if lbar is not None else None
+    t = H.measure(lambda: hdrjax_fit(method, x, max_size, kind, fixed=fixed), repeats[0])
+    res = hdrjax_fit(method, x, max_size, kind, fixed=fixed)
     ours = _params(res, names)
     rec = H.record(
         BENCH,
@@ -282,8 +286,8 @@ def fit_pair(case, method, rgb, x, max_size, kind="percentile", repeats=(7, 7), 
         converged=bool(res.success),
         params=ours,
     )
-    t = H.measure(lambda: scipy_fit(method, rgb, start, max_size, kind), repeats[1])
-    sol = scipy_fit(method, rgb, start, max_size, kind)
+    t = H.measure(lambda: scipy_fit(method, rgb, start, max_size, kind, lbar), repeats[1])
+    sol = scipy_fit(method, rgb, start, max_size, kind, lbar)
     theirs = dict(zip(names, map(float, np.exp(sol.x)), strict=True))
     peer = H.record(
         BENCH,
@@ -314,47 +318,17 @@ def solve_only(rgb: np.ndarray, source: str, repeats: int) -> list[dict]:
     lbar = np_log_average(rgb)
     records = []
     for method in ("reinhard2002", "tumblin_reinhard"):
-        names = tuple(n for n, _ in START[method])
-        start = [v for _, v in START[method]]
-        fixed = {"log_average": lbar} if method == "reinhard2002" else {}
         case = f"{method} 2 params, solve only at {_res(small.shape)} (given image and log-average)"
-        common = dict(image=source, fit_resolution=_res(small.shape))
-        t = H.measure(lambda m=method, f=fixed: hdrjax_fit(m, xs, None, fixed=f), repeats)
-        res = hdrjax_fit(method, xs, None, fixed=fixed)
-        ours = _params(res, names)
-        records.append(
-            H.record(
-                BENCH,
-                case,
-                "hdrjax",
-                timing=t,
-                compiled=True,
-                **common,
-                dtype="float32",
-                steps=int(res.steps),
-                loss=float(res.loss),
-                converged=bool(res.success),
-                params=ours,
-            )
-        )
-        t = H.measure(lambda m=method, st=start: scipy_fit(m, small, st, None, lbar=lbar), repeats)
-        sol = scipy_fit(method, small, start, None, lbar=lbar)
-        theirs = dict(zip(names, map(float, np.exp(sol.x)), strict=True))
-        records.append(
-            H.record(
-                BENCH,
-                case,
-                "scipy least_squares lm (NumPy)",
-                timing=t,
-                **common,
-                dtype="float64",
-                nfev=int(sol.nfev),
-                residual_calls=int(sol.residual_calls),
-                loss=float(np.sum(sol.fun**2)),
-                converged=bool(sol.success),
-                params=theirs,
-                max_rel_param_diff=max(abs(ours[n] / theirs[n] - 1) for n in names),
-            )
+        records += fit_pair(
+            case,
+            method,
+            small,
+            xs,
+            None,
+            repeats=(repeats, repeats),
+            lbar=lbar if method == "reinhard2002" else None,
+            image=source,
+            fit_resolution=_res(small.shape),
         )
     return records
 

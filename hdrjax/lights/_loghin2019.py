@@ -87,7 +87,7 @@ kept candidates or ``SMALL_LIGHTS`` lights (most maps) they run on those sizes o
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import jax
@@ -844,17 +844,23 @@ def _find(
         kk = jnp.arange(K, dtype=jnp.int32)[:, None, None]
         none = big << kbits
         key = jnp.where(filled, (dist << kbits) | kk, none).astype(jnp.int32)
-        lab = jax.lax.scatter_min(
-            jnp.full((H, W + 2 * rx_), none, jnp.int32),
-            jnp.stack([Y.reshape(-1), x0.reshape(-1)], axis=-1),
-            key.reshape(K * PY, PX),
-            jax.lax.ScatterDimensionNumbers(
-                update_window_dims=(1,),
-                inserted_window_dims=(0,),
-                scatter_dims_to_operand_dims=(0, 1),
-            ),
-            mode=jax.lax.GatherScatterMode.PROMISE_IN_BOUNDS,
-        )
+        rows_at = jnp.stack([Y.reshape(-1), x0.reshape(-1)], axis=-1)
+
+        def onto_rows(scatter: Callable, fill: int, rows: Array) -> Array:
+            """``rows`` (K, PY, PX) window rows scattered onto the seam-padded image."""
+            return scatter(
+                jnp.full((H, W + 2 * rx_), fill, jnp.int32),
+                rows_at,
+                rows.reshape(K * PY, PX),
+                jax.lax.ScatterDimensionNumbers(
+                    update_window_dims=(1,),
+                    inserted_window_dims=(0,),
+                    scatter_dims_to_operand_dims=(0, 1),
+                ),
+                mode=jax.lax.GatherScatterMode.PROMISE_IN_BOUNDS,
+            )
+
+        lab = onto_rows(jax.lax.scatter_min, none, key)
         r = rx_
         if plan.sphere:
             seam = jnp.minimum(lab[:, : 2 * r], lab[:, W:])
@@ -945,17 +951,7 @@ def _find(
         # the label image: each light's new label scattered over the pixels it owns (a
         # relabel pass over the whole image cost more)
         new_lab = jnp.where(own, relabel(jnp.arange(K, dtype=jnp.int32))[:, None, None], -1)
-        labels = jax.lax.scatter_max(
-            jnp.full((H, W + 2 * rx_), -1, jnp.int32),
-            jnp.stack([Y.reshape(-1), x0.reshape(-1)], axis=-1),
-            new_lab.reshape(K * PY, PX),
-            jax.lax.ScatterDimensionNumbers(
-                update_window_dims=(1,),
-                inserted_window_dims=(0,),
-                scatter_dims_to_operand_dims=(0, 1),
-            ),
-            mode=jax.lax.GatherScatterMode.PROMISE_IN_BOUNDS,
-        )
+        labels = onto_rows(jax.lax.scatter_max, -1, new_lab)
 
         # one packed table, one gather: each separate output array is a kernel XLA compiles
         fields = {
