@@ -14,9 +14,11 @@ the same values (reinhard2002 ``key = 0.18``, ``L_white = 10``; tumblin_reinhard
 ``L_wa = 0.1``, ``L_white = 0.5``; from ``L_wa = 1`` both solvers stall where P99 is
 clipped and has no gradient), optimise
 ``ln p``, and fit on the same image: the full-resolution input box-filtered to 64 pixels on
-the long side (64×32, hdrjax.fit's default ``max_size``), after measuring the operator's
-statistics (log-average, maximum) on the full-resolution image; the timed call includes
-that measuring and the downscale on both sides. Both sides box-filter the same way: sum the
+the long side (64×32, hdrjax.fit's default ``max_size``), after measuring what the
+operator needs from the full-resolution image (reinhard2002's log-average; since session 5
+hdrjax no longer measures tumblin_reinhard's ``L_max``, which its output does not use once
+``L_white`` is set, and which the peer never measured); the timed call includes that
+measuring and the downscale on both sides. Both sides box-filter the same way: sum the
 rows, then the columns of that smaller result. (Until session 4 the peer used one strided
 ``reshape(h, f, w, f, 3).mean(axis=(1, 3))``: at 2048×1024 ~15× slower than the two-step
 sum, min 42 against 2.7 ms in one process, which made the whole peer 2–9× slower than it

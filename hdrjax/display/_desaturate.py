@@ -25,6 +25,13 @@ between ``T`` and ``L_max`` collapses; hdrjax's operators scale RGB by ``L_d / L
 the channel ratios set here survive tone mapping and the highlights come out white. The
 function is plain arithmetic on linear RGB and can also run on display-referred linear RGB.
 
+Speed (automatic threshold, histogram): one pass over the luminance gives the histogram
+for ``L₉₀``, ``L_max`` and the test that every pixel is finite
+(:func:`hdrjax._stats._one_pass`), then one fused loop reads RGB, recomputes the luminance
+and the mean and writes the output (reading a luminance image back would cost ~30 % more
+at 4096²). Images with NaN or ±Inf pixels, the exact method and a manual threshold take the
+masked path.
+
 Differentiable in the image and in ``T`` (a manual threshold; the histogram percentile is a
 constant for ``jax.grad``, the exact one is differentiable). Leading axes are a batch: each
 image gets its own automatic threshold and maximum. Pixels with a NaN or infinite channel
@@ -43,7 +50,16 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
-from .._stats import DEFAULT_BINS, _histogram_percentiles, _positive_range, percentile
+from .._stats import (
+    DEFAULT_BINS,
+    _from_counts,
+    _histogram_percentiles,
+    _one_pass,
+    _positive_count,
+    _positive_range,
+    mantissa_bits,
+    percentile,
+)
 from ..operators._base import as_float_image
 
 PERCENT_ABOVE = 10.0
@@ -65,17 +81,25 @@ def _over_batch(fn, lead: int, *arrays):
     return fn(*arrays)
 
 
+def _rank_q(n_finite: Array, n_pos: Array, dtype) -> tuple[Array, Array]:
+    """``(rank_pos, q)``: the 90th percentile of all ``n_finite`` pixels as a rank and a
+    quantile among the ``n_pos`` positive ones (what :func:`hdrjax.stats.percentile` ranks).
+
+    numpy.percentile's rank among all n finite pixels is 0.9 (n − 1); the n − n_pos
+    non-positive ones come first, so among the positive ones it is
+    rank_pos = n_pos − 1 − 0.1 (n − 1)."""
+    frac = 1.0 - PERCENT_ABOVE / 100.0
+    rank_pos = n_pos.astype(dtype) - 1 - (1 - frac) * (n_finite.astype(dtype) - 1)
+    q = jnp.clip(rank_pos / jnp.maximum(n_pos - 1, 1).astype(dtype), 0.0, 1.0)
+    return rank_pos, q
+
+
 def _threshold_one(L: Array, finite: Array | None, method: str, bins: int) -> tuple[Array, Array]:
     """2 × the luminance exceeded by 10 % of the finite pixels of one image (``finite``:
     their mask, ``None`` when every pixel is)."""
     # finite is None: the clean branch of _clean_or_masked, every pixel is finite
     n_finite, n_pos, lo, hi = _positive_range(L, finite, known_finite=finite is None)
-    # percentile() ranks the positive pixels only. numpy.percentile's rank of the 90th
-    # percentile among all n finite pixels is 0.9 (n − 1); the n − n_pos non-positive ones
-    # come first, so among the positive ones it is rank_pos = n_pos − 1 − 0.1 (n − 1).
-    frac = 1.0 - PERCENT_ABOVE / 100.0
-    rank_pos = n_pos.astype(L.dtype) - 1 - (1 - frac) * (n_finite.astype(L.dtype) - 1)
-    q = jnp.clip(rank_pos / jnp.maximum(n_pos - 1, 1).astype(L.dtype), 0.0, 1.0)
+    rank_pos, q = _rank_q(n_finite, n_pos, L.dtype)
     if method == "exact":
         value, err = percentile(L, 100.0 * q, method="exact", where=finite)
     else:
@@ -85,6 +109,22 @@ def _threshold_one(L: Array, finite: Array | None, method: str, bins: int) -> tu
     # the 90th percentile lies among the non-positive pixels: the threshold is 0
     value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
     return THRESHOLD_FACTOR * value, err
+
+
+def _one_pass_threshold(L: Array, bins: int) -> tuple[Array, Array, Array]:
+    """``(finite, threshold, L_max)`` of a whole image in one pass over its luminance
+    (:func:`hdrjax._stats._one_pass`: the fixed-grid histogram and the extrema together);
+    the threshold and ``L_max`` are those of :func:`_threshold_one` and of the mapping when
+    ``finite`` (every pixel finite), meaningless otherwise."""
+    m = mantissa_bits(bins)
+    counts, _, lmax, minpos, _, f = _one_pass(L, m, None)
+    n_pos = _positive_count(counts, m)
+    rank_pos, q = _rank_q(jnp.asarray(L.size, jnp.int32), n_pos, L.dtype)
+    hi = jnp.where(n_pos > 0, lmax, 1.0)
+    lo = jnp.where(n_pos > 0, minpos, 1.0)
+    value = _from_counts(counts, q[None], lo, jnp.maximum(hi, lo), m)[0][0]
+    value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
+    return jnp.isfinite(f), THRESHOLD_FACTOR * value, lmax
 
 
 def highlight_threshold(
@@ -144,23 +184,56 @@ def _clean_or_masked(x: Array, weights, fn):
     return jax.lax.cond(jnp.isfinite(jnp.sum(L_raw)), clean, masked, x)
 
 
+def _mapping(x: Array, L: Array, t: Array, L_max: Array) -> Array:
+    """Steps 1–4 of the module docstring on an image whose pixels are all finite."""
+    span = L_max - t
+    ok = span > 0
+    s = jnp.where(ok, jnp.clip((L - t) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
+    mean = ((x[..., 0] + x[..., 1] + x[..., 2]) / 3.0)[..., None]
+    return x - s[..., None] * (x - mean)
+
+
+@jax.custom_jvp
+def _max_of(L: Array, value: Array) -> Array:
+    """``value``, which is ``max(L)`` measured elsewhere, with ``jnp.max``'s derivative in
+    ``L`` (shared equally by tied pixels), so that ``L_max`` stays differentiable."""
+    return jax.lax.stop_gradient(value)
+
+
+@_max_of.defjvp
+def _max_of_jvp(primals, tangents):
+    (L, value), (t, _) = primals, tangents
+    hit = (L == value).astype(L.dtype)
+    return _max_of(L, value), jnp.sum(t * hit) / jnp.maximum(jnp.sum(hit), 1.0)
+
+
 def _desaturate_one(x: Array, T: Array | None, weights, method: str, bins: int) -> Array:
     def run(L, finite):
         t = _threshold_one(L, finite, method, bins)[0] if T is None else T
         if finite is None:
-            L_max = jnp.max(L)
-            safe = x
-        else:
-            L_max = jnp.max(jnp.where(finite, L, -jnp.inf))
-            safe = jnp.where(finite[..., None], x, 0.0)
-        span = L_max - t
-        ok = span > 0
-        s = jnp.where(ok, jnp.clip((L - t) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
-        mean = ((safe[..., 0] + safe[..., 1] + safe[..., 2]) / 3.0)[..., None]
-        out = safe - s[..., None] * (safe - mean)
-        return out if finite is None else jnp.where(finite[..., None], out, x)
+            return _mapping(x, L, t, jnp.max(L))
+        L_max = jnp.max(jnp.where(finite, L, -jnp.inf))
+        safe = jnp.where(finite[..., None], x, 0.0)
+        return jnp.where(finite[..., None], _mapping(safe, L, t, L_max), x)
 
-    return _clean_or_masked(x, weights, run)
+    if T is not None or method != "histogram":
+        return _clean_or_masked(x, weights, run)
+    # automatic threshold from the histogram: the statistics pass also tells whether the
+    # image is finite (no separate sum), and the clean mapping recomputes the luminance
+    # from RGB in its own loop instead of reading the luminance image back
+    L = luminance(x, weights)
+    L = jax.lax.optimization_barrier(L.reshape(-1)).reshape(L.shape)  # one luminance image
+    finite, t, L_max = _one_pass_threshold(L, bins)
+
+    def clean(x, t, L_max):
+        L = luminance(x, weights)
+        return _mapping(x, L, t, _max_of(L, L_max))
+
+    def masked(x, *_):
+        finite = _finite_rgb(x)
+        return run(luminance(jnp.where(finite[..., None], x, 0.0), weights), finite)
+
+    return jax.lax.cond(finite, clean, masked, x, t, L_max)
 
 
 def desaturate_highlights(

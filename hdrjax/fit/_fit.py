@@ -7,7 +7,9 @@ image box-filtered down to at most ``max_size`` pixels on its long side (64 by d
 statistics of 2048 pixels are as good a guide to the parameters as those of millions, and a
 percentile near the median sorts, ~0.7 Mpixel/s on CPU; pass ``max_size=None`` to fit at
 full resolution). Parameters the fit does not touch but that the operator measures
-(``None``) are measured once, from the full-resolution image, before the fit.
+(``None``) are measured once, from the full-resolution image, before the fit, unless the
+operator's output does not depend on any of them (``tumblin_reinhard``'s ``L_max`` once
+``L_white`` is set): then they are not measured and stay ``None``.
 
 Least-squares solvers see the residuals with a dense forward-mode Jacobian: each step
 evaluates ``r`` and ``∂r/∂z`` together in one vmapped forward sweep (the primal and one
@@ -149,6 +151,7 @@ class _Problem(eqx.Module):
     names: tuple[str, ...] = eqx.field(static=True)
     bounds: tuple[_Bound, ...] = eqx.field(static=True)
     log: tuple[bool, ...] = eqx.field(static=True)
+    measure: bool = eqx.field(static=True, default=True)  # False: see _output_needs_unset
 
     def to_free(self, op: AbstractOperator) -> dict[str, Array]:
         return {
@@ -247,7 +250,7 @@ def _dense_jvp(fn: Callable[[Any], Array]) -> Callable[[Any], Array]:
 
 
 def _solve_one(prob, op, image, target, solver, max_steps, max_size):
-    op = op.measure(image)
+    op = op.measure(image) if prob.measure else op
     small = downscale(image, max_size)
 
     def residuals(z):
@@ -334,6 +337,49 @@ def _default_solver(rtol: float, atol: float) -> optx.LevenbergMarquardt:
     return eqx.tree_at(lambda s: s.search, solver, search)
 
 
+_NEEDS_UNSET: dict[Any, bool] = {}
+
+
+def _output_needs_unset(op: AbstractOperator) -> bool:
+    """Whether ``op``'s output depends on any of its unset parameters once they are set,
+    e.g. False for ``tumblin_reinhard`` with ``L_wa`` and ``L_white`` given: its ``L_max``
+    only serves to derive ``L_white``. Then the fit need not measure them (a pass over the
+    full-resolution image; they stay ``None`` in the result, the output is the same).
+    Decided by dead-code elimination on the traced operator (unset parameters set to
+    placeholders, on a 2×2 image), once per operator structure; True whenever that fails."""
+    leaves, treedef = jax.tree_util.tree_flatten(op)
+    key = (treedef, tuple((getattr(v, "shape", ()), getattr(v, "dtype", type(v))) for v in leaves))
+    if key not in _NEEDS_UNSET:
+        unset = op.unset()
+        if not unset:
+            _NEEDS_UNSET[key] = False
+            return False
+        dt = jnp.result_type(float)
+
+        def out(vals):
+            o = eqx.tree_at(
+                lambda o: tuple(getattr(o, n) for n in unset), op, vals, is_leaf=lambda v: v is None
+            )
+            return o(jnp.ones((2, 2, 3), dt))
+
+        try:
+            from jax._src.interpreters import partial_eval as pe
+
+            closed = jax.make_jaxpr(out)(tuple(jnp.ones((), dt) for _ in unset))
+            _, used = pe.dce_jaxpr(closed.jaxpr, [True] * len(closed.jaxpr.outvars))
+            needs = any(used)
+        except Exception:  # an operator this check cannot trace: measure, as before
+            needs = True
+        _NEEDS_UNSET[key] = needs
+    return _NEEDS_UNSET[key]
+
+
+# built once per configuration: an equinox Module's construction costs ~0.05 ms a call
+_problem = functools.lru_cache(maxsize=256)(
+    lambda names, bounds, log, measure: _Problem(names, bounds, log, measure)
+)
+
+
 def _setup(
     operator: AbstractOperator | str,
     target: AbstractTarget,
@@ -391,7 +437,7 @@ def _setup(
         solver = _default_solver(float(rtol), float(atol))
     elif rtol is not None or atol is not None:
         raise ValueError("rtol/atol: set them on the solver you pass")
-    return _Problem(names, tuple(bnds), log), op, solver
+    return _problem(names, tuple(bnds), log, _output_needs_unset(op)), op, solver
 
 
 _ARGS_DOC = """

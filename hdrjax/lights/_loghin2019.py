@@ -74,8 +74,10 @@ rounding of reordered sums): the window maximum of step 5 is separable (a column
 maximum over the window's rows, computed once per map, then one value per window column
 and sample); step 8 tests only the pairs ``i < j`` the greedy merge reads; step 9 reads
 each light-window row as one slice (rows across the seam from a strip of the columns
-around it, no padded copy of the map), grows the masks bit-packed (32 rows to a word),
-resolves pixels two lights reach by a scatter-min of window rows, sums each light's
+around it, no padded copy of the map), grows the masks bit-packed (32 rows to a word;
+a single map stores each step's mask instead of counting steps: :func:`_grow`),
+resolves pixels two lights reach by a scatter-min of window rows (the seam columns
+folded in place), sums each light's
 statistics along the window rows by one matrix product (per-column weights: 1, the
 column offset, cos/sin of the azimuth offset) and then over the rows, and writes the
 label image by a scatter of each light's owned pixels; the median of the automatic
@@ -423,15 +425,24 @@ def _blur(L: Array, sigma: float, wrap: bool) -> Array:
     return along_rows(along_rows(L, False).T, wrap).T
 
 
-def _grow(filled: Array, above: Array, limit: int) -> tuple[Array, Array]:
+def _grow(filled: Array, above: Array, limit: int, history: bool = False) -> tuple[Array, Array]:
     """Grow ``filled`` over the 8-connected pixels of ``above`` (both ``(..., Y, X)``
     bool), one ring per step, for at most ``limit`` steps; also each filled pixel's step
     (its geodesic distance from the start, in pixels).
 
     The masks are bit-packed, 32 rows to a ``uint32`` word, so a step is a few word
     operations on ``(..., ceil(Y / 32), X)`` arrays (on booleans each step cost ~100 µs
-    on XLA:CPU and large lights take 25+ steps). The distance is a bit-sliced counter of
-    the steps each pixel spent unfilled: ``dist(p) = #{steps whose start had p unfilled}``.
+    on XLA:CPU and large lights take 25+ steps). The distance is
+    ``dist(p) = #{steps whose start had p unfilled}``, kept as a bit-sliced counter (one
+    word array per bit); the first up to 31 steps (most lights stop there) count with 5
+    planes, the rest with all ``bit_length(limit)``.
+
+    ``history`` (not under ``vmap``: the step index would be batched): the first 31 steps
+    store their start masks ``S_i`` in a stack instead of counting (one in-place update per
+    step instead of the counter's 5 planes and their copies). The masks grow, so
+    ``count(p) ≥ m ⟺ p ∉ S_{m−1}``, and the 5 counter planes follow after the loop by a
+    binary search, most significant bit first (``S_15``, then ``S_7``/``S_23``, …; slots of
+    steps not run are all ones). Same results.
     """
     ny = above.shape[-2]
     nw = -(-ny // 32)
@@ -462,23 +473,48 @@ def _grow(filled: Array, above: Array, limit: int) -> tuple[Array, Array]:
             | jnp.concatenate([v[..., 1:], zcol], axis=-1)
         )
 
+    def ring(fill: Array) -> tuple[Array, Array]:
+        new = above_p & dilate(fill) & ~fill
+        return fill | new, jnp.max(new) != 0
+
     def step(state: tuple[Array, tuple[Array, ...], Array, Array]) -> Any:
         fill, count, i, _ = state
         carry, planes = ~fill, []
         for c in count:
             planes.append(c ^ carry)
             carry = c & carry
-        new = above_p & dilate(fill) & ~fill
-        return fill | new, tuple(planes), i + 1, jnp.any(new != 0)
+        fill, more = ring(fill)
+        return fill, tuple(planes), i + 1, more
 
     above_p = pack(above)
     zeros = jnp.zeros_like(above_p)
-    # first up to 31 steps with a 5-plane counter (most lights stop there), then the rest
-    # with all planes: the counter is most of a step's kernels
     b1 = min(bits, 5)
-    state = (pack(filled), (zeros,) * b1, jnp.int32(0), jnp.bool_(True))
-    state = jax.lax.while_loop(lambda s: s[3] & (s[2] < min(limit, 2**b1 - 1)), step, state)
-    if b1 < bits:
+    n1 = min(limit, 2**b1 - 1)  # steps of the first loop
+    if history:
+
+        def store(state: tuple[Array, Array, Array, Array]) -> Any:
+            fill, hist, i, _ = state
+            hist = jax.lax.dynamic_update_index_in_dim(hist, fill, i, 0)
+            fill, more = ring(fill)
+            return fill, hist, i + 1, more
+
+        ones = jnp.full((2**b1 - 1,) + above_p.shape, 0xFFFFFFFF, jnp.uint32)
+        state = (pack(filled), ones, jnp.int32(0), jnp.bool_(True))
+        fill, hist, i, more = jax.lax.while_loop(lambda s: s[3] & (s[2] < n1), store, state)
+        # binary search: bit b of the count from S[base + 2^b − 1], base = the higher bits
+        count: list[Array] = []
+        for b in range(b1 - 1, -1, -1):
+            opts = [~hist[j + 2**b - 1] for j in range(0, 2**b1 - 1, 2 ** (b + 1))]
+            for sel in count:  # count[0]: the least significant known bit, picks first
+                opts = [
+                    (sel & hi) | (~sel & lo) for lo, hi in zip(opts[0::2], opts[1::2], strict=True)
+                ]
+            count.insert(0, opts[0])
+        state = (fill, tuple(count), i, more)
+    else:
+        state = (pack(filled), (zeros,) * b1, jnp.int32(0), jnp.bool_(True))
+        state = jax.lax.while_loop(lambda s: s[3] & (s[2] < n1), step, state)
+    if b1 < bits:  # more steps, with all planes
         fill, count, i, more = state
         state = (fill, count + (zeros,) * (bits - b1), i, more)
         state = jax.lax.while_loop(lambda s: s[3] & (s[2] < limit), step, state)
@@ -596,7 +632,8 @@ def _smooth(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
     """Step 2 and the per-pixel passes over the map that need no threshold, materialised
     once (a call boundary: fused into their consumers they were recomputed per read):
 
-    - ``L``, ``Lb``: the luminance and its blur (samples, 2×2 blocks, line test);
+    - ``L``, ``Lb``: the luminance and its blur (samples, 2×2 blocks, line test); ``Lb``
+      only when blurred (else it is ``L``: a second output of one image is a copy);
     - ``V``, ``I``: the column-wise window maximum of the 2×2 max-pooled ``Lb``
       (:func:`_search_image`);
     - ``strips``: each channel step 9 reads (``L``, RGB, the peak luminance, ``Lb`` when
@@ -617,7 +654,9 @@ def _smooth(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
         k: jnp.concatenate([v[:, v.shape[1] - n :], v[:, :n]], axis=1) for k, v in chans.items()
     }
     total = accurate_sum(L * jnp.asarray(_domega(plan), L.dtype)[:, None])
-    return dict(L=L, Lb=Lb, V=V, I=I, strips=strips, total=total, top=jnp.max(L_peak))
+    # Lb is L when unblurred: returned once (a second output of the same image is a copy)
+    blurred = dict(Lb=Lb) if plan.blur > 0 else {}
+    return dict(L=L, V=V, I=I, strips=strips, total=total, top=jnp.max(L_peak)) | blurred
 
 
 def _row_slices(x: Array, y: Array, x0: Array, n: int) -> Array:
@@ -648,8 +687,9 @@ def _windows(x: Array, strip: Array, y: Array, x0: Array, r: int) -> Array:
     inner = _row_slices(x, y, jnp.clip(s, 0, w - n), n)
     seam = _row_slices(strip, y, jnp.clip(jnp.mod(s + n, w), 0, n), n)
     # the barrier keeps both as slice gathers (fused into the select, XLA:CPU gathered
-    # pixel by pixel, several times slower)
-    inner, seam = jax.lax.optimization_barrier((inner, seam))
+    # pixel by pixel, several times slower) and materialises the row flags (else the
+    # select recomputed their index arithmetic for every pixel)
+    inner, seam, cross = jax.lax.optimization_barrier((inner, seam, cross))
     return jnp.where(cross.reshape(cross.shape + (1,) * (inner.ndim - cross.ndim)), seam, inner)
 
 
@@ -663,7 +703,7 @@ def _find(
 ) -> dict[str, Array]:
     """Steps 3–9 on the prepared images (:func:`_prepare`, :func:`_smooth`); ``single``:
     not under ``vmap`` (data-dependent branches then skip work)."""
-    Lb, V, I, strips = smooth["Lb"], smooth["V"], smooth["I"], smooth["strips"]
+    Lb, V, I, strips = smooth.get("Lb", smooth["L"]), smooth["V"], smooth["I"], smooth["strips"]
     dt = Lb.dtype
     H, W = plan.h, plan.w
     K, R, C = plan.max_lights, plan.max_reps, plan.max_candidates
@@ -819,6 +859,9 @@ def _find(
             X = wx[:, None] + offx[None, :]
             inside = ((Yw >= 0) & (Yw < H))[:, :, None] & ((X >= 0) & (X < W))[:, None, :]
             inside = inside & lvalid[:, None, None]
+        # materialised once: fused into each per-pixel consumer, XLA:CPU recomputed the
+        # index arithmetic (rounding, wrapping) for every pixel of every window
+        Y, x0 = jax.lax.optimization_barrier((Y, x0))
 
         def window(name: str, src: Array) -> Array:
             return _windows(src, strips[name], Y, x0, rx_)
@@ -834,7 +877,7 @@ def _find(
             .set(True, mode="drop")
         )
         big = PY * PX + 1
-        filled, dist = _grow(seeds & above, above, big)
+        filled, dist = _grow(seeds & above, above, big, history=single)
         # a pixel two lights reach goes to the nearer (geodesic steps), then the brighter: the
         # smallest key, by a scatter-min of the window rows into an image padded by rx_
         # columns each side (padded column j is column j − rx_); on the sphere the columns
@@ -863,8 +906,11 @@ def _find(
         lab = onto_rows(jax.lax.scatter_min, none, key)
         r = rx_
         if plan.sphere:
+            # both copies of the seam columns get their minimum, in place (a concatenate
+            # copied the whole image)
             seam = jnp.minimum(lab[:, : 2 * r], lab[:, W:])
-            lab = jnp.concatenate([seam, lab[:, 2 * r : W], seam], axis=1)
+            lab = jax.lax.dynamic_update_slice(lab, seam, (0, 0))
+            lab = jax.lax.dynamic_update_slice(lab, seam, (0, W))
         own = filled & (_row_slices(lab, Y, x0, PX) == key)
 
         def fold(raw: Array) -> Array:
@@ -874,7 +920,10 @@ def _find(
                 return raw[:, r : r + W]
             left = jnp.maximum(raw[:, r : 2 * r], raw[:, W + r :])
             right = jnp.maximum(raw[:, W : W + r], raw[:, :r])
-            return jnp.concatenate([left, raw[:, 2 * r : W], right], axis=1)
+            # in place, then one slice (a concatenate copied the middle twice)
+            raw = jax.lax.dynamic_update_slice(raw, left, (0, r))
+            raw = jax.lax.dynamic_update_slice(raw, right, (0, W))
+            return raw[:, r : r + W]
 
         # light properties from its pixels: first summed along each window row, as one
         # matrix product with per-column weights (1, the column offset, cos and sin of its

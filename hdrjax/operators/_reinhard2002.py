@@ -122,6 +122,11 @@ class Reinhard2002(AbstractLuminanceCurve):
     bins: int = eqx.field(static=True, default=DEFAULT_BINS)
     weights: tuple[float, float, float] = weights_field()
 
+    def _stats_settings(self) -> tuple[str, int, float] | None:
+        if not self.unset() or self.percentile_method != "histogram":
+            return None  # the exact method sorts: only where the image needs it
+        return (self.percentile_method, self.bins, self.delta)
+
     def _measure(self, p: Prepared) -> "Reinhard2002":
         if not self.unset():
             return self

@@ -133,15 +133,26 @@ def _hard_image(shape, seed, dirty):
     return L
 
 
-@pytest.mark.parametrize("dirty", [False, True])
+@pytest.mark.parametrize("dirty", [False, True, "tail"])
 def test_blocked_passes_against_numpy(monkeypatch, dirty):
     # small blocks, so a 150×201 image spans many blocks and a ragged tail (the code paths
-    # a 4096² image takes); NumPy float64 is the reference
+    # a 4096² image takes: the one-pass lanes, and the masked pass for bad pixels);
+    # "tail": the only bad pixels are in the ragged tail, which the lanes never see.
+    # NumPy float64 is the reference
     import hdrjax._stats as S
 
     monkeypatch.setattr(S, "BLOCK", 4096)
-    L = _hard_image((150, 201), 5, dirty).astype(np.float32)
-    st = jax.jit(measure)(L)
+    monkeypatch.setattr(S, "LANES", 4096)  # 7 blocks of lanes + a tail of 1478
+    L = _hard_image((150, 201), 5, dirty is True).astype(np.float32)
+    if dirty == "tail":
+        L.flat[[29000, 30001, 30100]] = [np.nan, 0.0, -2.0]
+    finite, st = jax.jit(S.measure_checked)(L)
+    assert bool(finite) == (not dirty)
+    # the histogram on the bit-pattern grid, bin by bin (NaN, ±Inf, negatives: past the end)
+    counts = np.asarray(jax.jit(lambda x: S._one_pass(x, 10, None)[0])(L))
+    bits = L.reshape(-1).view(np.uint32) >> 13
+    grid = S.grid_size(10)
+    np.testing.assert_array_equal(counts, np.bincount(bits[bits < grid], minlength=grid))
     f = L[np.isfinite(L)].astype(np.float64)
     pos = f[f > 0]
     assert int(st.n_nonfinite) == L.size - f.size and int(st.n_positive) == pos.size

@@ -101,6 +101,31 @@ def test_non_finite_pixels_pass_through_and_do_not_spread():
     np.testing.assert_allclose(out[~bad], _reference(clean, float(T))[~bad], rtol=1e-4, atol=1e-6)
 
 
+@pytest.mark.parametrize("bad", [None, "lanes", "tail"])
+def test_one_pass_threshold_over_many_blocks(monkeypatch, bad):
+    """The automatic path reads the luminance once (histogram, maximum and the finiteness
+    test together, in blocks of lanes plus a ragged tail): against NumPy, with a NaN pixel
+    in a block or in the tail, and dark pixels counted in the 90 % rank."""
+    import hdrjax._stats as S
+
+    monkeypatch.setattr(S, "LANES", 1024)  # 5 blocks + a tail of 107 pixels
+    rgb = _hdr((61, 86, 3), seed=7)  # a shape of its own: compiled afresh with small lanes
+    rgb[:6] = 0.0
+    rgb[10, 3] = -0.5
+    flat = rgb.reshape(-1, 3)
+    if bad:
+        flat[2000 if bad == "lanes" else 5200] = [np.nan, 1.0, 2.0]
+    ok = np.all(np.isfinite(flat), axis=-1)
+    L = flat[ok].astype(np.float64) @ np.asarray(REC709_WEIGHTS)
+    T_ref = 2 * np.percentile(L, 90, method="lower")  # the order statistic the bin holds
+    out = np.asarray(desaturate_highlights(rgb)).reshape(-1, 3)
+    T, err = highlight_threshold(rgb)
+    assert abs(float(T) / T_ref - 1) <= float(err) + 1e-6
+    np.testing.assert_array_equal(out[~ok], flat[~ok])  # NaN stays where it was
+    expect = _reference(flat[ok], float(T))
+    np.testing.assert_allclose(out[ok], expect, rtol=1e-4, atol=1e-6)
+
+
 def test_differentiable_in_the_threshold_and_the_image():
     rgb = jnp.asarray(_hdr((16, 16, 3), seed=5))
 
@@ -115,6 +140,23 @@ def test_differentiable_in_the_threshold_and_the_image():
     assert np.isfinite(np.asarray(gi)).all()
     ge = jax.grad(lambda x: jnp.sum(desaturate_highlights(x, method="exact")))(rgb)
     assert np.isfinite(np.asarray(ge)).all()
+
+
+def test_automatic_path_is_differentiable_through_the_maximum(x64):
+    # the one-pass statistics give L_max; its derivative (through the brightest pixel,
+    # which the histogram threshold does not see move) against central differences
+    rgb = _hdr((12, 14, 3), seed=6).astype(np.float64)
+    i = np.unravel_index(np.argmax(rgb @ np.asarray(REC709_WEIGHTS)), rgb.shape[:2])
+
+    def f(x):
+        return jnp.sum(desaturate_highlights(x) ** 2)
+
+    g = np.asarray(jax.grad(f)(jnp.asarray(rgb)))
+    for c in range(3):
+        e = np.zeros_like(rgb)
+        e[i + (c,)] = 1e-4 * rgb[i + (c,)]
+        fd = (float(f(rgb + e)) - float(f(rgb - e))) / (2 * e[i + (c,)])
+        np.testing.assert_allclose(g[i + (c,)], fd, rtol=1e-5)
 
 
 def test_batches_get_their_own_thresholds_and_modules_compose():

@@ -221,3 +221,26 @@ def test_default_solver_agrees_with_minpack_on_a_numpy_model(cornell, x64):
         [float(res.params["key"]), float(res.params["L_white"])], np.exp(sol.x), rtol=1e-6
     )
     np.testing.assert_allclose(res.statistics, want, rtol=1e-8)
+
+
+def test_unused_measured_parameters_are_not_measured():
+    # tumblin_reinhard with L_wa and L_white given never uses L_max (it only derives
+    # L_white): the fit skips measuring it (a pass over the full image) and leaves it None;
+    # where a measured value matters (L_white unset; reinhard2002's log-average) it measures
+    from hdrjax.fit._fit import _output_needs_unset
+
+    x = jnp.asarray(_lognormal(4, 8), jnp.float32) * 50
+    op = hdrjax.make_operator("tumblin_reinhard", L_wa=2.0, L_white=0.5)
+    assert not _output_needs_unset(op)
+    assert _output_needs_unset(hdrjax.make_operator("tumblin_reinhard", L_wa=2.0))
+    assert _output_needs_unset(hdrjax.make_operator("reinhard2002", key=0.2, L_white=3.0))
+    res = hf.fit(op, x, ht.MeanLuminance(0.3), params="L_wa", max_size=None)
+    assert bool(res.success) and res.operator.L_max is None
+    L_max = float(np.max(np.asarray(x) @ np.asarray(hdrjax.REC709_WEIGHTS)))
+    with_max = eqx.tree_at(
+        lambda o: o.L_max, res.operator, jnp.asarray(L_max), is_leaf=lambda v: v is None
+    )
+    np.testing.assert_array_equal(np.asarray(res.operator(x)), np.asarray(with_max(x)))
+    np.testing.assert_allclose(
+        float(ht.MeanLuminance(0.3).statistics(with_max(x))[0]), 0.3, rtol=1e-4
+    )

@@ -56,16 +56,19 @@ def test_separable_window_search_is_the_whole_window_argmax(sphere):
     np.testing.assert_array_equal(vals.max(axis=1), win.max(axis=1))
 
 
+@pytest.mark.parametrize("history", [False, True])
 @pytest.mark.parametrize("ny", [9, 31, 45])
-def test_bit_packed_growth_matches_breadth_first_search(ny):
+def test_bit_packed_growth_matches_breadth_first_search(ny, history):
     """Grown masks and step counts = a breadth-first search over 8-connected pixels
-    (scipy.ndimage binary propagation, one ring per step), with one and two packed words."""
+    (scipy.ndimage binary propagation, one ring per step), with one and two packed words;
+    step counter and stored step masks (``history``, a single map's form)."""
     rng = np.random.default_rng(ny)
     above = rng.random((3, ny, 23)) < 0.6
     seeds = np.zeros_like(above)
     seeds[0, ny // 2, 11] = seeds[1, 0, 0] = seeds[2, ny - 1, 22] = True
     seeds &= above
-    fill, dist = (np.asarray(a) for a in jax.jit(L._grow, static_argnums=2)(seeds, above, 10_000))
+    grow = jax.jit(L._grow, static_argnums=(2, 3))
+    fill, dist = (np.asarray(a) for a in grow(seeds, above, 10_000, history))
     for k in range(3):
         ref_fill, cur = seeds[k].copy(), seeds[k].copy()
         ref_dist = np.where(cur, 0, -1)
@@ -83,10 +86,12 @@ def test_bit_packed_growth_matches_breadth_first_search(ny):
         np.testing.assert_array_equal(dist[k][ref_fill], ref_dist[ref_fill])
 
 
-def test_bit_packed_growth_long_path_past_the_first_counter():
+@pytest.mark.parametrize("history", [False, True])
+def test_bit_packed_growth_long_path_past_the_first_counter(history):
     """A serpentine (one connector per odd row, alternate ends): geodesic distances up to
-    ~120 steps, past the 31 steps of the first, 5-plane counter; against a breadth-first
-    search (scipy binary dilation, one ring per step)."""
+    ~120 steps, past the 31 steps of the first, 5-plane counter (or of the stored masks,
+    ``history``); against a breadth-first search (scipy binary dilation, one ring per
+    step)."""
     ny, nx = 9, 23
     above = np.zeros((ny, nx), bool)
     above[0::2] = True
@@ -96,7 +101,7 @@ def test_bit_packed_growth_long_path_past_the_first_counter():
     seeds[0, 0] = True
     fill, dist = (
         np.asarray(a)[0]
-        for a in jax.jit(L._grow, static_argnums=2)(seeds[None], above[None], 10_000)
+        for a in jax.jit(L._grow, static_argnums=(2, 3))(seeds[None], above[None], 10_000, history)
     )
     cur, ref = seeds.copy(), np.where(seeds, 0, -1)
     step = 0
@@ -110,6 +115,30 @@ def test_bit_packed_growth_long_path_past_the_first_counter():
     np.testing.assert_array_equal(fill, above)
     np.testing.assert_array_equal(dist[above], ref[above])
     assert ref.max() > 100
+
+
+@pytest.mark.parametrize("history", [False, True])
+@pytest.mark.parametrize("limit", [7, 20])
+def test_bit_packed_growth_stops_at_the_step_limit(limit, history):
+    """At most ``limit`` rings (fewer than the 31 stored masks / counter steps): the
+    serpentine's fill and distances = a breadth-first search cut after ``limit`` rings."""
+    ny, nx = 9, 23
+    above = np.zeros((ny, nx), bool)
+    above[0::2] = True
+    for i, y in enumerate(range(1, ny, 2)):
+        above[y, nx - 1 if i % 2 == 0 else 0] = True
+    seeds = np.zeros_like(above)
+    seeds[0, 0] = True
+    grow = jax.jit(L._grow, static_argnums=(2, 3))
+    fill, dist = (np.asarray(a)[0] for a in grow(seeds[None], above[None], limit, history))
+    cur, ref = seeds.copy(), np.where(seeds, 0, -1)
+    for step in range(1, limit + 1):
+        new = ndimage.binary_dilation(cur, np.ones((3, 3), bool)) & above & ~cur
+        ref[new] = step
+        cur |= new
+    np.testing.assert_array_equal(fill, cur)
+    np.testing.assert_array_equal(dist[cur], ref[cur])
+    assert ref.max() == limit
 
 
 def test_window_rows_wrap_across_the_seam():

@@ -54,6 +54,40 @@ def test_automatic_parameters_match_numpy_reference(x64, seed, sigma):
     np.testing.assert_allclose(float(fast.L_white), white, rtol=RTOL64)
 
 
+@pytest.mark.parametrize("bad", [None, "tail"])
+def test_statistics_pass_decides_the_clean_path(monkeypatch, bad):
+    """The automatic operator measures and checks for NaN/Inf in one pass over the
+    luminance (blocks of lanes plus a ragged tail): the parameters against the NumPy
+    reference of the finite pixels, and a NaN pixel in the tail (the lanes' own NaN test:
+    tests/core/test_stats_encode.py) stays NaN without reaching its neighbours or the
+    statistics."""
+    import hdrjax._stats as S
+
+    monkeypatch.setattr(S, "LANES", 1024)  # 4 blocks + a tail of 479 pixels
+    rng = np.random.default_rng(5)
+    rgb = (rng.lognormal(0.0, 2.0, (75, 61, 1)) * rng.uniform(0.5, 1.5, (75, 61, 3))).astype(
+        np.float32
+    )
+    flat = rgb.reshape(-1, 3)
+    flat[7] = 0.0
+    if bad:
+        flat[4400] = [1.0, np.nan, 1.0]
+    ok = np.all(np.isfinite(flat), axis=-1)
+    key, white, lbar = jgt_reference(flat[ok].astype(np.float64))
+    op = Reinhard2002().measure(rgb)
+    np.testing.assert_allclose(float(op.key), key, rtol=5e-3)  # the histogram's bound
+    np.testing.assert_allclose(float(op.L_white), white, rtol=1e-5)
+    np.testing.assert_allclose(float(op.log_average), lbar, rtol=1e-5)
+    out = np.asarray(jax.jit(Reinhard2002())(rgb)).reshape(-1, 3)
+    assert np.isnan(out[~ok]).all() and np.isfinite(out[ok]).all()
+    # the mapping (luminance recomputed from RGB in its loop): the paper's curve in NumPy
+    Lw = flat[ok].astype(np.float64) @ W
+    Ls = float(op.key) / float(op.log_average) * Lw
+    Ld = Ls * (1 + Ls / float(op.L_white) ** 2) / (1 + Ls)
+    ratio = np.where(Lw > 0, Ld / np.where(Lw > 0, Lw, 1.0), 0.0)
+    np.testing.assert_allclose(out[ok], flat[ok] * ratio[:, None], rtol=1e-5, atol=1e-7)
+
+
 @pytest.mark.parametrize("k", [1.0, 2.0**-12])
 def test_white_point_guard_branch(x64, k):
     # narrow range: Eq. 5's white would be below the log-average -> 1.5 * max (scaled), at
