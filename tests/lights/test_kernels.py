@@ -86,32 +86,42 @@ def test_bit_packed_growth_matches_breadth_first_search(ny, history):
         np.testing.assert_array_equal(dist[k][ref_fill], ref_dist[ref_fill])
 
 
-@pytest.mark.parametrize("history", [False, True])
-def test_bit_packed_growth_long_path_past_the_first_counter(history):
-    """A serpentine (one connector per odd row, alternate ends): geodesic distances up to
-    ~120 steps, past the 31 steps of the first, 5-plane counter (or of the stored masks,
-    ``history``); against a breadth-first search (scipy binary dilation, one ring per
-    step)."""
-    ny, nx = 9, 23
+def _serpentine(ny: int = 9, nx: int = 23) -> tuple[np.ndarray, np.ndarray]:
+    """``(above, seeds)``: every even row, joined by one connector per odd row at alternate
+    ends (geodesic distances up to ~120 steps), grown from the top-left pixel."""
     above = np.zeros((ny, nx), bool)
     above[0::2] = True
     for i, y in enumerate(range(1, ny, 2)):
         above[y, nx - 1 if i % 2 == 0 else 0] = True
     seeds = np.zeros_like(above)
     seeds[0, 0] = True
-    fill, dist = (
-        np.asarray(a)[0]
-        for a in jax.jit(L._grow, static_argnums=(2, 3))(seeds[None], above[None], 10_000, history)
-    )
+    return above, seeds
+
+
+def _bfs(seeds: np.ndarray, above: np.ndarray, limit: int) -> tuple[np.ndarray, np.ndarray]:
+    """Breadth-first search (scipy binary dilation, one 8-connected ring per step) for at
+    most ``limit`` rings: ``(reached, distance)``, distance -1 where not reached."""
     cur, ref = seeds.copy(), np.where(seeds, 0, -1)
-    step = 0
-    while True:
-        step += 1
+    for step in range(1, limit + 1):
         new = ndimage.binary_dilation(cur, np.ones((3, 3), bool)) & above & ~cur
         if not new.any():
             break
         ref[new] = step
         cur |= new
+    return cur, ref
+
+
+@pytest.mark.parametrize("history", [False, True])
+def test_bit_packed_growth_long_path_past_the_first_counter(history):
+    """The serpentine's geodesic distances run past the 31 steps of the first, 5-plane
+    counter (or of the stored masks, ``history``); against a breadth-first search."""
+    above, seeds = _serpentine()
+    fill, dist = (
+        np.asarray(a)[0]
+        for a in jax.jit(L._grow, static_argnums=(2, 3))(seeds[None], above[None], 10_000, history)
+    )
+    cur, ref = _bfs(seeds, above, 10_000)
+    np.testing.assert_array_equal(cur, above)
     np.testing.assert_array_equal(fill, above)
     np.testing.assert_array_equal(dist[above], ref[above])
     assert ref.max() > 100
@@ -122,20 +132,10 @@ def test_bit_packed_growth_long_path_past_the_first_counter(history):
 def test_bit_packed_growth_stops_at_the_step_limit(limit, history):
     """At most ``limit`` rings (fewer than the 31 stored masks / counter steps): the
     serpentine's fill and distances = a breadth-first search cut after ``limit`` rings."""
-    ny, nx = 9, 23
-    above = np.zeros((ny, nx), bool)
-    above[0::2] = True
-    for i, y in enumerate(range(1, ny, 2)):
-        above[y, nx - 1 if i % 2 == 0 else 0] = True
-    seeds = np.zeros_like(above)
-    seeds[0, 0] = True
+    above, seeds = _serpentine()
     grow = jax.jit(L._grow, static_argnums=(2, 3))
     fill, dist = (np.asarray(a)[0] for a in grow(seeds[None], above[None], limit, history))
-    cur, ref = seeds.copy(), np.where(seeds, 0, -1)
-    for step in range(1, limit + 1):
-        new = ndimage.binary_dilation(cur, np.ones((3, 3), bool)) & above & ~cur
-        ref[new] = step
-        cur |= new
+    cur, ref = _bfs(seeds, above, limit)
     np.testing.assert_array_equal(fill, cur)
     np.testing.assert_array_equal(dist[cur], ref[cur])
     assert ref.max() == limit
