@@ -31,14 +31,10 @@ are upsampled by linear interpolation. Tiled and mip-mapped files give their top
 """
 
 import base64
-import contextlib
 import json
 import math
 import os
 import re
-import sys
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +42,7 @@ import numpy as np
 
 from ..layers import _model as M
 from ..layers._errors import LayerShapeError, MissingLayerError, ReadError
+from . import _exr_core
 
 EXR_MAGIC = b"\x76\x2f\x31\x01"
 MAX_PIXELS = 1 << 30
@@ -192,38 +189,6 @@ def _check_header(name: str, size: int, headers: list[dict]) -> None:
             raise ReadError(f"{name}: deep OpenEXR images are not supported")
 
 
-@contextlib.contextmanager
-def _captured_output(sink: list[str]) -> Iterator[None]:
-    """Capture what the OpenEXR C/C++ library prints on file descriptors 1 and 2.
-
-    The bindings report corrupt pixel data by printing (and returning no parts) rather
-    than raising; the text goes into the ReadError message instead of the user's terminal.
-    """
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
-    with tempfile.TemporaryFile() as tmp:
-        try:
-            os.dup2(tmp.fileno(), 1)
-            os.dup2(tmp.fileno(), 2)
-            yield
-        finally:
-            os.dup2(saved[0], 1)
-            os.dup2(saved[1], 2)
-            os.close(saved[0])
-            os.close(saved[1])
-            tmp.seek(0)
-            sink.append(tmp.read(4096).decode("utf-8", "replace"))
-
-
-def _first_problem(text: str, path: Path) -> str:
-    for line in text.splitlines():
-        line = line.strip().replace(str(path), "").lstrip(": ")
-        if line:
-            return line[:160]
-    return "unreadable pixel data"
-
-
 def _open(path: Path):
     name = path.name
     OpenEXR = _exr()
@@ -235,24 +200,30 @@ def _open(path: Path):
         raise OSError(f"{name}: cannot read ({e.strerror or e})") from None
     if magic != EXR_MAGIC:
         raise ReadError(f"{name}: not an OpenEXR file (bad magic number)")
-    printed: list[str] = []
+    # the bindings print (rather than raise) what they find wrong; ask the C library first,
+    # silently, so that a truncated file or a corrupt header never reaches them
+    problem = _exr_core.check(str(path), size)
+    if problem is not None:
+        raise ReadError(f"{name}: corrupt or truncated OpenEXR file ({problem[:160]})")
     try:
-        with _captured_output(printed):
-            head = OpenEXR.File(str(path), header_only=True)
-            nparts = len(head.parts)
-            if nparts == 0:
-                raise ReadError(f"{name}: corrupt OpenEXR header (no parts)")
-            _check_header(name, size, [p.header for p in head.parts])
-            f = OpenEXR.File(str(path), separate_channels=True)
-            ok = len(f.parts) == nparts
+        head = OpenEXR.File(str(path), header_only=True)
+        nparts = len(head.parts)
+        if nparts == 0:
+            raise ReadError(f"{name}: corrupt OpenEXR header (no parts)")
+        _check_header(name, size, [p.header for p in head.parts])
+        f = OpenEXR.File(str(path), separate_channels=True)
     except ReadError:
         raise
     except Exception as e:  # the bindings raise RuntimeError/OpenEXR.error/ValueError/...
         msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise ReadError(f"{name}: corrupt or unsupported OpenEXR file ({msg[:160]})") from None
-    if not ok:
-        why = _first_problem("".join(printed), path)
-        raise ReadError(f"{name}: corrupt or truncated OpenEXR pixel data ({why})")
+    if len(f.parts) != nparts:
+        # the chunks are framed correctly (checked above): their content is not; the library
+        # has printed its reason
+        raise ReadError(
+            f"{name}: corrupt OpenEXR pixel data ({nparts - len(f.parts)} of {nparts} "
+            "part(s) could not be decoded by the OpenEXR library)"
+        )
     return f
 
 
