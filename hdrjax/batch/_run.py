@@ -33,6 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..io._atomic import remove_stale_temporaries
 from ._frames import (
     FrameError,
     dispatch_render,
@@ -403,16 +404,6 @@ def _values_for(
     return dict(zip(order, smoothed, strict=True))
 
 
-def _remove_stale_temp(entries: Sequence[_Entry]) -> None:
-    """Temporary files a killed writer left next to the outputs (``.<name>.*.tmp``)."""
-    for e in entries:
-        for p in e.out.parent.glob(f".{glob.escape(e.out.name)}.*.tmp"):
-            try:
-                p.unlink()
-            except OSError:
-                pass
-
-
 def run(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
     pipeline: Pipeline | str,
@@ -544,7 +535,9 @@ def run(
             client.close()
         if cluster is not None:
             cluster.close()
-        _remove_stale_temp(entries)
+        # temporaries a killed writer (this run's or an earlier one's) left next to the
+        # outputs; those of another run writing into this folder now are left alone
+        remove_stale_temporaries([e.out for e in entries])
     failed = {
         path: msg for _, (path, msg) in sorted(col.failed.items()) if path not in col.done.values()
     }
