@@ -10,7 +10,7 @@ import sys
 
 from ..io._display import DEFAULT_COMPRESSION
 from ._cmd_tonemap import build_operator
-from ._common import DataError, UsageError, positive_float
+from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
 
 
 def _positive_int(text: str) -> int:
@@ -164,6 +164,7 @@ def build_pipeline(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     from ..batch import expand_paths, run as batch_run
+    from ..batch._frames import output_path
 
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("--workers starts a local cluster; it does not go with --scheduler")
@@ -174,6 +175,8 @@ def run(args: argparse.Namespace) -> int:
         paths = expand_paths(args.inputs)
     except FileNotFoundError as e:
         raise DataError(str(e)) from None
+    outputs = [output_path(p, args.output, pipeline.extension) for p in paths]
+    refuse_overwriting_inputs([args.output, *outputs], paths)
     try:
         summary = batch_run(
             paths,

@@ -3,7 +3,14 @@
 import argparse
 import os
 
-from ._common import HDR_EXT, DataError, UsageError, positive_float, read_image
+from ._common import (
+    HDR_EXT,
+    DataError,
+    UsageError,
+    positive_float,
+    read_image,
+    refuse_overwriting_inputs,
+)
 
 
 def register(subparsers) -> None:
@@ -35,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     if os.path.splitext(args.output)[1].lower() not in HDR_EXT:
         raise UsageError(f"{args.output}: expected one of {', '.join(HDR_EXT)}")
+    refuse_overwriting_inputs([args.output], [args.input])
     img = read_image(args.input)
     if img.kind != "rgb":
         raise DataError(f"{args.input}: channels {', '.join(img.channels)}; expected R, G, B")

@@ -3,7 +3,7 @@
 import argparse
 import os
 
-from ._common import DataError, UsageError
+from ._common import DataError, UsageError, refuse_overwriting_inputs
 
 HDR_EXT = (".exr", ".hdr", ".pic", ".pfm")
 LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -75,8 +75,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--sidecars and --pixel-type apply to HDR outputs only")
     if not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
-    if os.path.exists(args.output) and os.path.samefile(args.input, args.output):
-        raise UsageError(f"{args.output}: output is the input file")
+    refuse_overwriting_inputs([args.output], [args.input])
     if os.path.exists(args.output) and not args.overwrite:
         raise DataError(f"{args.output}: already exists (use --overwrite)")
     part = int(args.part) if args.part is not None and args.part.isdigit() else args.part

@@ -3,7 +3,7 @@
 import argparse
 import os
 
-from ._common import DataError, UsageError, read_image, value_range
+from ._common import DataError, UsageError, read_image, refuse_overwriting_inputs, value_range
 
 DISPLAY_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 FIGURE_EXT = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -144,6 +144,9 @@ def run(args: argparse.Namespace) -> int:
     if legend not in ("side", "none"):
         if os.path.splitext(legend)[1].lower() not in FIGURE_EXT:
             raise UsageError(f"--legend {legend}: expected side, none or a .png/.pdf/.svg file")
+    refuse_overwriting_inputs(
+        [args.output, None if legend in ("side", "none") else legend], [args.input]
+    )
     if args.range and args.percentiles:
         raise UsageError("--range and --percentiles exclude each other")
     if args.bands and (args.range or args.percentiles):

@@ -3,7 +3,7 @@
 import argparse
 import os
 
-from ._common import HDR_EXT, DataError, UsageError, read_image
+from ._common import HDR_EXT, DataError, UsageError, read_image, refuse_overwriting_inputs
 
 
 def _odd(text: str) -> int:
@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     if os.path.splitext(args.output)[1].lower() not in HDR_EXT:
         raise UsageError(f"{args.output}: expected one of {', '.join(HDR_EXT)}")
+    refuse_overwriting_inputs([args.output], [args.input])
     if args.passes < 1:
         raise UsageError(f"--passes: expected an integer >= 1, got {args.passes}")
     img = read_image(args.input)

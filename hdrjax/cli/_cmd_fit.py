@@ -17,7 +17,14 @@ from ._cmd_tonemap import (
     with_file_weights,
     write_output,
 )
-from ._common import HDR_EXT, LDR_EXT, CLIError, DataError, UsageError
+from ._common import (
+    HDR_EXT,
+    LDR_EXT,
+    CLIError,
+    DataError,
+    UsageError,
+    refuse_overwriting_inputs,
+)
 
 EXIT_NOT_CONVERGED = 3
 """Exit status when the fit did not converge (ran out of steps, or ended non-finite)."""
@@ -274,6 +281,7 @@ def _set_values(op, sets: list[str]):
 def run(args: argparse.Namespace) -> int:
     check_output(args)
     parsed = parse_targets(args.target)
+    refuse_overwriting_inputs([args.output], [v for kind, _, v in parsed if kind == "reference"])
     if args.max_steps < 1:
         raise UsageError(f"--max-steps: expected an integer >= 1, got {args.max_steps}")
     if args.max_size < 0:

@@ -6,7 +6,7 @@ import os
 import time
 
 from ..io._atomic import atomic_path, atomic_write_bytes
-from ._common import DataError, UsageError, positive_float
+from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
 
 OVERLAY_EXT = (".png", ".jpg", ".jpeg", ".pdf", ".svg")
 
@@ -135,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"{kind} {path}: expected one of {', '.join(exts)}")
     if args.output and args.method == "median-cut":
         raise UsageError("-o draws detected lights; it does not apply to --method median-cut")
+    refuse_overwriting_inputs([args.output, args.json_path], [args.input])
     from ._cmd_tonemap import load_rgb
 
     t0 = time.perf_counter()

@@ -5,7 +5,7 @@ import json
 import os
 
 from ._cmd_export import as_data_error
-from ._common import DataError, UsageError
+from ._common import DataError, UsageError, refuse_overwriting_inputs
 
 
 def _point(text: str) -> tuple[float, float]:
@@ -79,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("nothing to measure: give --from X,Y --to X,Y, --at X,Y or a region")
     if not (args.scale > 0):
         raise UsageError(f"--scale must be > 0, got {args.scale:g}")
+    refuse_overwriting_inputs([args.region_out], [args.input])
     if not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     part = int(args.part) if args.part is not None and args.part.isdigit() else args.part

@@ -4,7 +4,15 @@ import argparse
 import os
 import time
 
-from ._common import HDR_EXT, LDR_EXT, DataError, UsageError, positive_float, read_image
+from ._common import (
+    HDR_EXT,
+    LDR_EXT,
+    DataError,
+    UsageError,
+    positive_float,
+    read_image,
+    refuse_overwriting_inputs,
+)
 
 # command-line option -> operator parameter, and the operators that accept it
 OPTION_PARAMS = {
@@ -118,6 +126,7 @@ def check_output(args: argparse.Namespace) -> str:
         )
     if args.bits == 16 and ext in (".jpg", ".jpeg"):
         raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
+    refuse_overwriting_inputs([args.output], [args.input, args.table])
     return ext
 
 

@@ -5,7 +5,15 @@ import json
 import os
 import time
 
-from ._common import HDR_EXT, LDR_EXT, DataError, UsageError, positive_float, read_image
+from ._common import (
+    HDR_EXT,
+    LDR_EXT,
+    DataError,
+    UsageError,
+    positive_float,
+    read_image,
+    refuse_overwriting_inputs,
+)
 
 
 def register(subparsers) -> None:
@@ -145,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.perceptual and ext not in LDR_EXT:
         raise UsageError("--perceptual needs a .png/.jpg/.tif output")
+    refuse_overwriting_inputs([args.output], [args.input])
     view, effects = _view(args), _effects(args)
     if args.perceptual:  # Budak2005 re-adapts to the display itself
         if effects == "auto" or isinstance(effects, dict):

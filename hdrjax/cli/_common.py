@@ -49,6 +49,26 @@ def value_range(text: str) -> tuple[float, float]:
     return lo, hi
 
 
+def refuse_overwriting_inputs(outputs, inputs) -> None:
+    """UsageError ``OUTPUT: output is the input file`` when a file a command would write
+    (main output or an extra one) is one of the files it reads, through a symbolic or hard
+    link too; called before anything is read. ``None`` entries are skipped, and ``-``
+    (stdin/stdout) is never a file."""
+    from ..io._atomic import file_identity
+
+    read = {}
+    for p in inputs:
+        if p is not None and os.fspath(p) != "-":
+            read.setdefault(file_identity(p), os.fspath(p))
+    for p in outputs:
+        if p is None or os.fspath(p) == "-":
+            continue
+        src = read.get(file_identity(p))
+        if src is not None:
+            same = os.path.normpath(src) == os.path.normpath(os.fspath(p))
+            raise UsageError(f"{p}: output is the input file" + ("" if same else f" {src}"))
+
+
 def read_image(path: str):
     """``hdrjax.io.read(path)``; a missing or unreadable file → DataError naming it."""
     from .. import io as hio

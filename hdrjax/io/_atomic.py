@@ -116,6 +116,17 @@ def remove_stale_temporaries(paths: str | os.PathLike | Iterable[str | os.PathLi
     return removed
 
 
+def file_identity(path: str | os.PathLike) -> tuple:
+    """What ``path`` names, for telling whether two paths are one file: device and inode
+    when it exists (symbolic and hard links to a file compare equal to it), else the
+    resolved path. Two paths are the same file when their identities are equal."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return ("path", os.path.realpath(path))
+    return ("inode", st.st_dev, st.st_ino)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[Path]:
     """Yield a temporary path next to ``path``; rename it onto ``path`` on success.
@@ -162,4 +173,4 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes, *, overwrite: bool 
     return Path(path)
 
 
-__all__ = ["atomic_path", "atomic_write_bytes", "remove_stale_temporaries"]
+__all__ = ["atomic_path", "atomic_write_bytes", "file_identity", "remove_stale_temporaries"]
