@@ -7,6 +7,7 @@ the problem: exit code 2 for usage errors, 1 for bad data.
 """
 
 import argparse
+import contextlib
 import importlib
 import os
 import pkgutil
@@ -60,6 +61,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _enable_compilation_cache()
+    if getattr(args, "output", None) == "-":
+        # the image goes to standard output: everything printed goes to standard error
+        args.stdout = sys.stdout.buffer
+        with contextlib.redirect_stdout(sys.stderr):
+            return _run(args)
+    return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
     except CLIError as e:

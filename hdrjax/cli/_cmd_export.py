@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
     if ext in LDR_EXT and (args.sidecars or args.pixel_type):
         raise UsageError("--sidecars and --pixel-type apply to HDR outputs only")
-    if not os.path.exists(args.input):
+    if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     refuse_overwriting_inputs([args.output], [args.input])
     if os.path.exists(args.output) and not args.overwrite:

@@ -158,7 +158,7 @@ def _print(doc: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not os.path.exists(args.input):
+    if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     try:
         doc = describe(args.input)

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     if not (args.scale > 0):
         raise UsageError(f"--scale must be > 0, got {args.scale:g}")
     refuse_overwriting_inputs([args.region_out], [args.input])
-    if not os.path.exists(args.input):
+    if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     part = int(args.part) if args.part is not None and args.part.isdigit() else args.part
     out: dict = {}

@@ -88,7 +88,13 @@ def add_output_argument(p: argparse.ArgumentParser) -> None:
         "--output",
         required=True,
         help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
-        "(display-referred linear)",
+        "(display-referred linear); '-' writes to standard output (needs --format)",
+    )
+    p.add_argument(
+        "--format",
+        choices=STDOUT_FORMATS,
+        help="the format written to standard output with -o - (status text then goes to "
+        "standard error)",
     )
 
 
@@ -116,9 +122,24 @@ def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
 
 
+STDOUT_FORMATS = ("png", "hdr", "pfm")
+"""Formats ``-o -`` writes to standard output (those that need no seeking)."""
+
+
+def output_ext(args: argparse.Namespace) -> str:
+    """The extension of ``args.output``; for ``-`` (standard output) the ``--format``'s."""
+    if args.output == "-":
+        return "." + args.format if getattr(args, "format", None) else ""
+    return os.path.splitext(args.output)[1].lower()
+
+
 def check_output(args: argparse.Namespace) -> str:
     """Validate ``args.output`` against the encoding options; returns its extension."""
-    ext = os.path.splitext(args.output)[1].lower()
+    ext = output_ext(args)
+    if args.output == "-" and not ext:
+        raise UsageError(f"-o -: give --format ({', '.join(STDOUT_FORMATS)}) for standard output")
+    if args.output != "-" and getattr(args, "format", None):
+        raise UsageError("--format applies to -o - (standard output) only")
     if ext not in LDR_EXT + HDR_EXT:
         raise UsageError(
             f"{args.output}: unsupported output type {ext or '(none)'};"
@@ -139,7 +160,7 @@ def encode_output(args: argparse.Namespace, display):
     from ..display import encode
 
     out = display
-    if os.path.splitext(args.output)[1].lower() in LDR_EXT:
+    if output_ext(args) in LDR_EXT:
         out = encode(out, args.transfer, gamma=args.gamma)
     return np.asarray(jax.block_until_ready(out))
 
@@ -151,13 +172,45 @@ def write_output(args: argparse.Namespace, encoded) -> None:
     from .. import io as hio
     from ..display import quantize
 
+    if args.output == "-":
+        _write_stdout(args, encoded)
+        return
     try:
-        if os.path.splitext(args.output)[1].lower() in LDR_EXT:
+        if output_ext(args) in LDR_EXT:
             hio.write_display(args.output, quantize(encoded, args.bits), bits=args.bits)
         else:
             hio.write(args.output, encoded.astype(np.float32))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
+
+
+def _write_stdout(args: argparse.Namespace, encoded) -> None:
+    """The whole file encoded in memory first, then written at once: an error leaves
+    standard output empty rather than holding half an image."""
+    import sys
+
+    import numpy as np
+
+    from ..display import quantize
+    from ..io import _display, _pfm, _rgbe
+
+    try:
+        if args.format == "png":
+            data = _display.encode_png(
+                _display.to_code_values(quantize(encoded, args.bits), args.bits)
+            )
+        elif args.format == "hdr":
+            data = _rgbe.encode_rgbe(np.asarray(encoded, np.float32))
+        else:
+            data = _pfm.encode_pfm(np.asarray(encoded, np.float32))
+    except ValueError as e:
+        raise DataError(f"-o -: cannot encode {args.format.upper()}: {e}") from None
+    out = getattr(args, "stdout", None) or sys.stdout.buffer
+    try:
+        out.write(data)
+        out.flush()
+    except OSError as e:  # a closed pipe (e.g. `| head -c 10`)
+        raise DataError(f"-o -: cannot write to standard output ({e.strerror or e})") from None
 
 
 def build_operator(args: argparse.Namespace):

@@ -73,7 +73,7 @@ def read_image(path: str):
     """``hdrjax.io.read(path)``; a missing or unreadable file → DataError naming it."""
     from .. import io as hio
 
-    if not os.path.exists(path):
+    if path != "-" and not os.path.exists(path):  # "-": standard input
         raise DataError(f"{path}: no such file")
     try:
         return hio.read(path)

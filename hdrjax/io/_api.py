@@ -18,6 +18,9 @@ layers and siblings are also looked up under the shared stem (``scene.position.e
 """
 
 import os
+import stat
+import sys
+import tempfile
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -26,6 +29,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
+from .. import _check
 from ..layers import _model as M
 from ..layers._errors import MissingLayerError, ReadError
 from . import _exr, _pfm, _rgbe
@@ -40,28 +44,84 @@ _SIDECAR_LAYERS = tuple(k for k in M.KNOWN_LAYERS if k in M.GRID_LAYERS)
 _XYZ_CHROMATICITIES = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0 / 3.0, 1.0 / 3.0)
 
 
-def _format(path: Path) -> str:
-    fmt = READ_FORMATS.get(path.suffix.lower())
-    if fmt is not None:
-        return fmt
-    try:
-        with open(path, "rb") as f:
-            head = f.read(64)
-    except OSError as e:
-        raise OSError(f"{path.name}: cannot read ({e.strerror or e})") from None
+def _sniff(head: bytes) -> str | None:
     if head.startswith(_exr.EXR_MAGIC):
         return "exr"
     if head.startswith((b"PF", b"Pf")):
         return "pfm"
-    if b"#?" in head:
+    if b"#?" in head[:64]:
         return "hdr"
-    raise ReadError(
-        f"{path.name}: unknown image format {path.suffix!r}; expected .exr, .hdr, .pic or .pfm"
-    )
+    return None
+
+
+def _format(path: Path, data: bytes | None = None) -> str:
+    """The format of ``path`` (its extension, else its first bytes: ``data`` when the
+    input was read into memory)."""
+    fmt = READ_FORMATS.get(path.suffix.lower())
+    if fmt is not None:
+        return fmt
+    if data is None:
+        try:
+            with open(path, "rb") as f:
+                data = f.read(64)
+        except OSError as e:
+            raise OSError(f"{path.name}: cannot read ({e.strerror or e})") from None
+    fmt = _sniff(data[:64])
+    if fmt is None:
+        raise ReadError(
+            f"{path.name}: unknown image format {path.suffix!r}; expected .exr, .hdr, .pic or .pfm"
+        )
+    return fmt
+
+
+def _stream_bytes(path: Path) -> bytes | None:
+    """All of ``path`` when it is not a regular file (a pipe, ``/dev/stdin``, a process
+    substitution), read once: such an input cannot be sniffed and then read again.
+    ``None`` for a regular file."""
+    if str(path) == "-":
+        return sys.stdin.buffer.read()
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    try:
+        with open(path, "rb") as f:
+            return f.read()
+    except OSError as e:
+        raise OSError(f"{path}: cannot read ({e.strerror or e})") from None
+
+
+def _read_bytes(
+    data: bytes, path: Path, part: int | str | None, layer: str | None
+) -> M.LayeredImage:
+    """:func:`read` of ``data``, the whole input read from a pipe."""
+    fmt = _format(path, data)
+    if fmt == "exr":  # the OpenEXR bindings read files only
+        with tempfile.TemporaryDirectory() as tmp:
+            p = Path(tmp) / "input.exr"
+            p.write_bytes(data)
+            try:
+                img = read(p, part=part, layer=layer, sidecars=False)
+            except (ValueError, OSError) as e:
+                raise type(e)(str(e).replace("input.exr", path.name)) from None
+        return img.replace(path=path)
+    if part not in (None, 0, "0"):
+        raise MissingLayerError(f"{path.name} has no part {part!r}; it has 1 part")
+    if fmt == "hdr":
+        img = _hdr_image(*_rgbe.decode_radiance(data, path.name), path)
+    else:
+        pixels, scale = _pfm.decode_pfm(data, path.name)
+        img = M.LayeredImage(image=pixels, path=path, attributes={"scale": scale})
+    return img if layer is None else img.select(layer)
 
 
 def _read_hdr(path: Path) -> M.LayeredImage:
-    rgb, info = _rgbe.read_rgbe_file(path)
+    return _hdr_image(*_rgbe.read_rgbe_file(path), path)
+
+
+def _hdr_image(rgb: np.ndarray, info: dict, path: Path) -> M.LayeredImage:
     chroma = None
     if info["format"] == "32-bit_rle_xyze":
         chroma = _XYZ_CHROMATICITIES
@@ -234,7 +294,10 @@ def read(
     """Read an HDR file (OpenEXR, Radiance RGBE, PFM) with its layers and sidecars.
 
     Args:
-        path: ``.exr``, ``.hdr`` / ``.pic`` or ``.pfm`` (other names are sniffed).
+        path: ``.exr``, ``.hdr`` / ``.pic`` or ``.pfm`` (other names are sniffed); ``"-"``
+            reads standard input. Pipes and other non-regular files (``/dev/stdin``,
+            ``<(...)``) are read into memory once, then sniffed and decoded; they have no
+            sidecars.
         part: EXR part index or name (default: the first part).
         layer: a layer or view to use as the main image instead of the default one (e.g.
             ``"left"`` for a stereo EXR, ``"position"``); sidecar layers count too.
@@ -251,10 +314,15 @@ def read(
         OSError: the file cannot be opened.
     """
     path = Path(path)
-    if not path.exists():
+    if str(path) != "-" and not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a folder, expected an image file")
+    data = _stream_bytes(path)
+    if data is not None:  # a pipe: no sidecars next to it
+        if str(path) == "-":
+            path = Path("<stdin>")
+        return _read_bytes(data, path, part, layer)
     fmt = _format(path)
     selected = layer is None
     if fmt == "exr" and layer is not None:
@@ -329,6 +397,9 @@ def write(
             f"{path.name}: unknown HDR format {path.suffix!r}; expected .exr, .hdr, .pic or .pfm"
         )
     img = _as_layered(image)
+    # no format holds an empty image (Radiance and PFM would write a file no reader opens)
+    shape = img.image.shape if isinstance(image, M.LayeredImage) else np.shape(image)
+    _check.nonempty(shape, "image", "(H, W) or (H, W, C)", (0, 1))
     grid = [k for k in img.layers if img.is_grid_layer(k)]
     if sidecars is True:
         side = grid

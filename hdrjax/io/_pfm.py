@@ -19,15 +19,17 @@ MAX_DIM = 1 << 20
 _HEAD_RE = re.compile(rb"^(P[Ff])\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s")
 
 
-def decode_pfm(data: bytes | memoryview, name: str = "image.pfm") -> tuple[np.ndarray, float]:
-    """Decode a PFM file held in memory; returns ``((H, W, C) float32, scale)``.
+def parse_header(head: bytes, name: str) -> tuple[int, int, int, float, int]:
+    """Parse the text header at the start of ``head`` (its first 256 bytes suffice).
 
-    ``scale`` is the absolute value of the header's scale field (1.0 by convention).
+    Returns:
+        ``(width, height, channels, scale, offset_of_pixel_data)``; ``scale`` keeps its
+        sign (the byte order).
 
     Raises:
-        ReadError: wrong magic, malformed header, absurd size or truncated data.
+        ReadError: wrong magic, malformed header or absurd size.
     """
-    head = bytes(data[:256])
+    head = head[:256]
     m = _HEAD_RE.match(head)
     if m is None:
         if not head.startswith((b"PF", b"Pf")):
@@ -43,16 +45,34 @@ def decode_pfm(data: bytes | memoryview, name: str = "image.pfm") -> tuple[np.nd
         raise ReadError(f"{name}: bad PFM scale {scale_text.decode('latin-1')!r}") from None
     if scale == 0 or not math.isfinite(scale):
         raise ReadError(f"{name}: bad PFM scale {scale} (must be non-zero and finite)")
-    c = 3 if magic == b"PF" else 1
-    off = m.end()
-    need = w * h * c * 4
-    if len(data) - off < need:
+    return w, h, (3 if magic == b"PF" else 1), scale, m.end()
+
+
+def _check_size(name: str, have: int, need: int) -> None:
+    if have < need:
         raise ReadError(
-            f"{name}: truncated PFM file ({len(data) - off} of {need} bytes of pixel data)"
+            f"{name}: truncated PFM file ({max(have, 0)} of {need} bytes of pixel data)"
         )
+
+
+def _pixels(raw: bytes | memoryview, w: int, h: int, c: int, scale: float, off: int) -> np.ndarray:
     dtype = np.dtype("<f4") if scale < 0 else np.dtype(">f4")
-    arr = np.frombuffer(data, dtype=dtype, count=w * h * c, offset=off).reshape(h, w, c)
-    return np.ascontiguousarray(arr[::-1], dtype=np.float32), abs(scale)
+    arr = np.frombuffer(raw, dtype=dtype, count=w * h * c, offset=off).reshape(h, w, c)
+    return np.ascontiguousarray(arr[::-1], dtype=np.float32)
+
+
+def decode_pfm(data: bytes | memoryview, name: str = "image.pfm") -> tuple[np.ndarray, float]:
+    """Decode a PFM file held in memory; returns ``((H, W, C) float32, scale)``.
+
+    ``scale`` is the absolute value of the header's scale field (1.0 by convention). Bytes
+    after the pixel data are ignored, as pfstools' ``pfsinpfm`` ignores them.
+
+    Raises:
+        ReadError: wrong magic, malformed header, absurd size or truncated data.
+    """
+    w, h, c, scale, off = parse_header(bytes(data[:256]), name)
+    _check_size(name, len(data) - off, w * h * c * 4)
+    return _pixels(data, w, h, c, scale, off), abs(scale)
 
 
 def encode_pfm(image: np.ndarray, *, little_endian: bool = True) -> bytes:
@@ -70,13 +90,24 @@ def encode_pfm(image: np.ndarray, *, little_endian: bool = True) -> bytes:
 
 
 def read_pfm_file(path: str | os.PathLike) -> tuple[np.ndarray, float]:
-    """Read a PFM file; see :func:`decode_pfm`."""
+    """Read a PFM file; see :func:`decode_pfm`.
+
+    The header is read first and the declared size checked against the file's size, so
+    only the pixel data is read (never more than the header declares, whatever follows).
+    """
     path = Path(path)
     try:
-        data = path.read_bytes()
+        with open(path, "rb") as f:
+            head = f.read(256)
+            w, h, c, scale, off = parse_header(head, path.name)
+            need = w * h * c * 4
+            _check_size(path.name, os.fstat(f.fileno()).st_size - off, need)
+            f.seek(off)
+            raw = f.read(need)
     except OSError as e:
         raise OSError(f"{path.name}: cannot read ({e.strerror or e})") from None
-    return decode_pfm(data, path.name)
+    _check_size(path.name, len(raw), need)  # the file shrank while being read
+    return _pixels(raw, w, h, c, scale, 0), abs(scale)
 
 
-__all__ = ["decode_pfm", "encode_pfm", "read_pfm_file"]
+__all__ = ["decode_pfm", "encode_pfm", "parse_header", "read_pfm_file"]

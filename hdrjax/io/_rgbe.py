@@ -42,6 +42,9 @@ _BLOCK_BYTES = 1 << 21  # input bytes expanded per step (cache-sized temporaries
 _HEAD = np.arange(256, dtype=np.int64)  # RLE header byte values (see _rle_plan)
 _RES_RE = re.compile(rb"^([-+])([XY]) +(\d+) +([-+])([XY]) +(\d+)\s*$")
 
+_F32_MAX = float(np.finfo(np.float32).max)
+_RGBE_MAX = 255.0 * 2.0**119  # the largest value an RGBE pixel holds (below _F32_MAX)
+
 # value of mantissa m with exponent e: m * 2**(e - 136); e = 0 means zero.
 _EXP_TABLE = np.array([0.0] + [math.ldexp(1.0, e - 136) for e in range(1, 256)], dtype=np.float32)
 
@@ -59,6 +62,21 @@ def _parse_floats(name: str, key: str, text: str, n: int) -> tuple[float, ...] |
     return vals
 
 
+def _check_correction(name: str, v: float) -> None:
+    """Refuse an EXPOSURE × COLORCORR product that float32 pixels cannot be divided by:
+    0 or infinite in float32, or whose inverse is (every pixel would decode to 0 or inf)."""
+    ok = 0.0 < v < math.inf
+    if ok:
+        with np.errstate(over="ignore", under="ignore"):
+            a, b = np.float32(v), np.float32(1.0 / v)
+        ok = bool(np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0)
+    if not ok:
+        raise ReadError(
+            f"{name}: unusable Radiance EXPOSURE x COLORCORR product {v:.6g}; dividing "
+            "float32 pixels by it gives 0 or infinity (expected 3e-39 to 3e38)"
+        )
+
+
 def parse_header(data: bytes | memoryview, name: str) -> tuple[dict, int]:
     """Parse a Radiance header; returns ``(info, offset_of_pixel_data)``.
 
@@ -68,8 +86,9 @@ def parse_header(data: bytes | memoryview, name: str) -> tuple[dict, int]:
     ``variables`` (``NAME -> value`` of the last ``NAME=value`` line for each name).
 
     Raises:
-        ReadError: not a Radiance file, a malformed or absurd resolution line, or a
-            truncated header.
+        ReadError: not a Radiance file, a malformed or absurd resolution line, a
+            truncated header, or an EXPOSURE × COLORCORR product (per channel) that is
+            not finite and non-zero, with a finite inverse, in float32.
     """
     head = bytes(data[:_HEADER_LIMIT])
     end = head.find(b"\n\n")
@@ -134,6 +153,8 @@ def parse_header(data: bytes | memoryview, name: str) -> tuple[dict, int]:
             info["colorcorr"] = (c[0] * v[0], c[1] * v[1], c[2] * v[2])
         elif ukey == "PRIMARIES":
             info["primaries"] = _parse_floats(name, key, value, 8)
+    for c in info["colorcorr"]:
+        _check_correction(name, c * info["exposure"])
     if info["format"] not in ("32-bit_rle_rgbe", "32-bit_rle_xyze"):
         raise ReadError(
             f"{name}: unsupported Radiance FORMAT {info['format']!r}; expected "
@@ -512,26 +533,80 @@ def encode_rgbe(
     return b"".join(chunks)
 
 
+def _max_pixel_bytes(nscan: int, length: int) -> int:
+    """The most bytes ``nscan`` scanlines of ``length`` pixels can take: flat pixels, or
+    new RLE scanlines made of literals only (a count byte per 128 bytes)."""
+    return nscan * max(4 * length, 4 + 4 * (length + -(-length // 128)))
+
+
+def correct_exposure(rgb: np.ndarray, info: dict) -> None:
+    """Divide ``rgb`` (float32, in place) by the header's EXPOSURE × COLORCORR.
+
+    The product is checked by :func:`parse_header`; a pixel whose corrected value exceeds
+    float32's range (a large mantissa and exponent with a small exposure) saturates at the
+    largest finite float32, as :func:`float_to_rgbe` saturates when encoding.
+    """
+    corr = np.array(info["colorcorr"], np.float64) * info["exposure"]
+    if np.all(corr == 1.0):
+        return
+    inv = (1.0 / corr).astype(np.float32)
+    with np.errstate(over="ignore"):
+        rgb *= inv
+    if float(inv.max()) * _RGBE_MAX >= 0.99 * _F32_MAX:
+        np.minimum(rgb, np.float32(_F32_MAX), out=rgb)
+
+
+def decode_radiance(data: bytes | memoryview, name: str = "image.hdr") -> tuple[np.ndarray, dict]:
+    """Decode a Radiance file held in memory to ``(values (H, W, 3) float32, info)`` with
+    EXPOSURE and COLORCORR divided out (see :func:`correct_exposure`)."""
+    rgb, info = decode_rgbe_float(data, name)
+    correct_exposure(rgb, info)
+    return rgb, info
+
+
 def read_rgbe_file(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     """Read a Radiance file; returns ``(values (H, W, 3) float32, info)``.
 
     EXPOSURE and COLORCORR are divided out, so the values are the original radiance
-    (in the file's units).
+    (in the file's units). The header is read first; then at most the bytes the declared
+    image can take (flat, or run-length encoded with no runs): data after the image is
+    ignored, as Radiance's own readers stop after the last scanline.
     """
     path = Path(path)
     try:
         with open(path, "rb") as f:
-            data = f.read()
+            data = f.read(_HEADER_LIMIT)
+            info, off = parse_header(data, path.name)
+            nscan = info["height"] if info["orientation"][1] == "Y" else info["width"]
+            length = info["width"] + info["height"] - nscan
+            limit = off + _max_pixel_bytes(nscan, length)
+            size = os.fstat(f.fileno()).st_size
+            data = _read_rest(f, data, min(limit, size) if size > 0 else limit)
     except OSError as e:
         raise OSError(f"{path.name}: cannot read ({e.strerror or e})") from None
-    rgb, info = decode_rgbe_float(data, path.name)
-    corr = np.array(info["colorcorr"], np.float64) * info["exposure"]
-    if not np.all(corr == 1.0):
-        rgb *= (1.0 / corr).astype(np.float32)
-    return rgb, info
+    return decode_radiance(data[:limit], path.name)
+
+
+def _read_rest(f, head: bytes, end: int) -> memoryview:
+    """``head`` (the first bytes of ``f``) followed by the rest of ``f`` up to byte ``end``,
+    in one buffer (no second copy of the pixel data)."""
+    if len(head) >= end:
+        return memoryview(head)
+    buf = bytearray(end)
+    buf[: len(head)] = head
+    view = memoryview(buf)
+    n = len(head)
+    while n < end:
+        k = f.readinto(view[n:])
+        if not k:
+            break
+        n += k
+    return view[:n]
 
 
 __all__ = [
+    "correct_exposure",
+    "decode_radiance",
     "decode_rgbe",
     "decode_rgbe_float",
     "encode_rgbe",
