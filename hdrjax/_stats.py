@@ -400,6 +400,8 @@ def percentile(
         raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
     L = _float(L)
     qs = jnp.asarray(q, dtype=L.dtype) / 100.0
+    if L.size == 0:  # an empty pool: no pixel qualifies (a sort or histogram of nothing fails)
+        return jnp.full(qs.shape, jnp.nan, L.dtype), jnp.zeros((), L.dtype)
     mask = None if where is None else jnp.broadcast_to(jnp.asarray(where, bool), L.shape)
     if method == "exact":
         # "positive" means at least the smallest normal float: XLA:CPU flushes subnormals
@@ -687,6 +689,7 @@ def measure_checked(
     _check.integer(bins, "bins", 2)
     _check.one_of(method, "method", ("histogram", "exact"))
     _check.real(L, "L")
+    _check.nonempty(np.shape(L), "L", "(H, W)", (-2, -1))
     L = _float(L)
     dt = L.dtype
     n_pix = jnp.asarray(L.size, jnp.int32)
@@ -694,6 +697,14 @@ def measure_checked(
     n_fin, n_pos, lmin, lmax, minpos, log_sum, counts, finite = _summary(
         L, bool(assume_finite), float(delta), m
     )
+    if assume_finite:
+        # an image that is not finite after all gives meaningless sums and extrema (NaN or
+        # ±Inf), which its caller discards (``finite`` is False); they must still be finite
+        # values, or the derivative of what is computed from them (``exp`` of a NaN sum) is
+        # NaN, and a zero cotangent times NaN poisons every pixel's gradient in reverse mode
+        lmin, lmax, minpos, log_sum = (
+            jnp.where(finite, v, 1.0) for v in (lmin, lmax, minpos, log_sum)
+        )
     any_finite = n_fin > 0
     any_pos = n_pos > 0
     lmin = jnp.where(any_finite, lmin, 0.0)

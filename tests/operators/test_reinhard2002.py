@@ -13,7 +13,7 @@ import hdrjax
 from hdrjax.operators import Reinhard2002, Reinhard2002Auto, Reinhard2002Local
 from hdrjax.operators._reinhard2002_local import ALPHA1, scales
 
-from ..conftest import RTOL32, RTOL64
+from ..conftest import DATA, RTOL32, RTOL64
 from .cases import natural
 
 W = np.array([0.2126, 0.7152, 0.0722])
@@ -220,3 +220,32 @@ def test_eager_calls_compile_once(caplog):
     assert compiled == []
     np.testing.assert_allclose(y2, hdrjax.tonemap(x2, "reinhard2002"), rtol=1e-6)
     assert float(m2.key) == float(op.measure(x2).key)
+
+
+def test_image_gradients_finite_beside_a_bad_pixel():
+    """Issue 16.1: one NaN or ±Inf value in a real crop (rooitou_park_1k.hdr, shipped in
+    data/) left the default (histogram) path's gradient NaN at every pixel: the statistics
+    pass, run on the assumption that the image is finite, produced a NaN log sum whose
+    derivative (times the zero cotangent of the branch not taken) reached every pixel.
+
+    Reference: the finite pixels alone, as one row (the statistics are order-free and the
+    operator global), give the same gradient at each of them."""
+    x = np.asarray(hdrjax.io.read(DATA / "rooitou_park_1k.hdr").rgb())[100:116, 200:224]
+    frames = np.stack([x] * 3)
+    for k, bad in enumerate([np.nan, np.inf, -np.inf]):
+        frames[k, 3, 4, 1] = bad
+    fin = np.all(np.isfinite(frames[0]), axis=-1)
+
+    def nansum(v):
+        return jnp.nansum(hdrjax.tonemap(v, "reinhard2002"))
+
+    def masked(v):
+        out = hdrjax.tonemap(v, "reinhard2002")
+        return jnp.sum(jnp.where(jnp.isfinite(out), out, 0.0))
+
+    ref = np.asarray(jax.jit(jax.grad(nansum))(jnp.asarray(x[fin][None])))[0]
+    for loss in (nansum, masked):
+        g = np.asarray(jax.jit(jax.vmap(jax.grad(loss)))(jnp.asarray(frames)))
+        for k in range(3):
+            assert np.all(np.isfinite(g[k][fin])), f"{loss.__name__}/{k}"
+            np.testing.assert_allclose(g[k][fin], ref, rtol=RTOL32, atol=1e-6)
