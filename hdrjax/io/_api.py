@@ -422,6 +422,8 @@ def write(
     main = img.replace(layers={k: v for k, v in img.layers.items() if k not in side})
     free = [k for k in side if k not in _SIDECAR_LAYERS]
     if fmt == "exr":
+        if main.siblings:
+            main = main.replace(siblings=_sibling_links(path, main.siblings))
         if free:
             attrs = dict(main.attributes)
             attrs[_SIDECAR_ATTR] = free
@@ -462,6 +464,26 @@ def write(
         with atomic_path(p, overwrite=overwrite) as tmp:
             _write_sidecar(tmp, img, k, pixel_type=pixel_type, compression=compression)
     return path
+
+
+def _sibling_links(path: Path, siblings: dict[str, Path]) -> dict[str, Path]:
+    """Sibling files as ``path`` records them: relative to its folder (between real paths,
+    so the link survives moving both together; absolute where no relative path exists,
+    e.g. another drive). A sibling whose file does not exist, or that is ``path`` itself,
+    is dropped with a warning: a link that points nowhere is worse than none."""
+    folder = os.path.realpath(path.parent)
+    out = {}
+    for q, p in sorted(siblings.items()):
+        target = os.path.realpath(p)
+        if not os.path.isfile(target) or target == os.path.join(folder, path.name):
+            why = "is the output itself" if os.path.isfile(target) else "does not exist"
+            warnings.warn(f"{path.name}: sibling {q} {p} {why}; not recorded", stacklevel=3)
+            continue
+        try:
+            out[q] = Path(os.path.relpath(target, folder))
+        except ValueError:  # no relative path (another drive)
+            out[q] = Path(target)
+    return out
 
 
 def _encode_hdr(img: M.LayeredImage, *, rle: bool, sidecars: Sequence[str] = ()) -> bytes:

@@ -359,6 +359,18 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def _sibling_path(path: Path, recorded: str) -> Path:
+    """A sibling file as recorded in ``path``'s header: a name in the same folder, a path
+    relative to the folder's real location (``hdrjax.io.write`` takes it between real
+    paths, so ``..`` steps are exact), or an absolute path."""
+    p = Path(recorded)
+    if p.is_absolute():
+        return p
+    if len(p.parts) == 1:
+        return path.parent / p
+    return Path(os.path.normpath(os.path.join(os.path.realpath(path.parent), p)))
+
+
 def read_exr(
     path: str | os.PathLike, *, part: int | str | None = None, layer: str | None = None
 ) -> M.LayeredImage:
@@ -551,8 +563,8 @@ def read_exr(
     if isinstance(siblings, (list, tuple)):
         for item in siblings:
             q, _, fname = str(item).partition("=")
-            if q and fname and "/" not in fname and "\\" not in fname:
-                sib[q] = path.parent / fname
+            if q and fname:
+                sib[q] = _sibling_path(path, fname)
     try:
         return M.LayeredImage(
             image=image,
@@ -693,7 +705,10 @@ def exr_parts(
         if img.projection == "equirectangular":
             header["envmap"] = OpenEXR.ENVMAP_LATLONG
     if img.siblings:
-        header[_SIBLINGS_ATTR] = [f"{q}={Path(p).name}" for q, p in sorted(img.siblings.items())]
+        # as hdrjax.io.write gives them: relative to the file's folder, or absolute
+        header[_SIBLINGS_ATTR] = [
+            f"{q}={Path(p).as_posix()}" for q, p in sorted(img.siblings.items())
+        ]
     ptype = pixel_type or img.pixel_types.get("image", "float")
     if ptype == "uint":
         raise ValueError("the main image cannot be stored as uint; use 'half' or 'float'")

@@ -9,6 +9,7 @@ import pytest
 from hdrjax import io as hio
 from hdrjax.cli import build_parser, main
 from hdrjax.cli._common import UsageError, refuse_overwriting_inputs
+from hdrjax.layers import LayeredImage
 
 # subcommand call → the file it must not overwrite ({P}); {OUT} is the output (the
 # protected file itself, or a link to it). Files named scene.exr and frames/a.exr exist.
@@ -90,3 +91,52 @@ def test_standard_streams_are_never_a_file(tmp_path):
     refuse_overwriting_inputs(["-", None, tmp_path / "y.exr"], ["-", p])  # nothing shared
     with pytest.raises(UsageError, match="x.exr: output is the input file$"):
         refuse_overwriting_inputs(["-", str(p)], ["-", str(p)])
+
+
+def _simulation(folder):
+    """``scene.exr`` (luminance) and its sibling ``scene.illuminance.exr`` in ``folder``."""
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(3)
+    lum = LayeredImage(image=rng.uniform(0.1, 9.0, (8, 8, 3)).astype(np.float32))
+    ill = LayeredImage(image=rng.uniform(1.0, 500.0, (8, 8, 1)).astype(np.float32))
+    hio.write(folder / "scene.exr", lum.replace(quantity="luminance"))
+    hio.write(folder / "scene.illuminance.exr", ill.replace(quantity="illuminance"))
+    return ill.image
+
+
+def _recorded(path) -> list[str]:
+    import OpenEXR
+
+    with OpenEXR.File(str(path)) as f:
+        return list(f.header()["hdrjax.siblings"])
+
+
+def test_siblings_stay_linked_from_another_folder(tmp_path):
+    ill = _simulation(tmp_path / "sim" / "in")
+    src = tmp_path / "sim" / "in" / "scene.exr"
+    img = hio.read(src)
+    assert set(img.siblings) == {"illuminance"}
+    med = tmp_path / "sim" / "out" / "scene_med.exr"
+    med.parent.mkdir()
+    hio.write(med, img)  # what `hdrjax filter` does with the filtered image
+    assert main(["export", str(src), "-o", str(tmp_path / "copy.exr")]) == 0
+    # recorded relative to the output's folder
+    assert _recorded(med) == ["illuminance=../in/scene.illuminance.exr"]
+    assert _recorded(tmp_path / "copy.exr") == ["illuminance=sim/in/scene.illuminance.exr"]
+    for out in (med, tmp_path / "copy.exr"):
+        sib = hio.read(out).siblings["illuminance"]
+        assert sib.samefile(tmp_path / "sim" / "in" / "scene.illuminance.exr")
+    # a relative link survives moving the output together with its sibling
+    os.rename(tmp_path / "sim", tmp_path / "moved")
+    other = hio.read(hio.read(tmp_path / "moved" / "out" / "scene_med.exr").siblings["illuminance"])
+    assert other.quantity == "illuminance"
+    np.testing.assert_array_equal(other.image, ill)
+
+
+def test_a_sibling_that_does_not_exist_is_dropped_with_a_note(tmp_path):
+    _simulation(tmp_path / "in")
+    img = hio.read(tmp_path / "in" / "scene.exr")
+    os.remove(tmp_path / "in" / "scene.illuminance.exr")
+    with pytest.warns(UserWarning, match=r"out\.exr: sibling illuminance .* does not exist; not"):
+        hio.write(tmp_path / "out.exr", img)
+    assert hio.read(tmp_path / "out.exr").siblings == {}
