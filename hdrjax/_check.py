@@ -22,6 +22,15 @@ function to it):
   arrays are rejected — a complex image is a mistake (an FFT result passed on), and
   silently dropping its imaginary part hides it.
 - **shape**: images are channels last; a function states its form, e.g. ``(..., H, W, 3)``.
+- **empty**: an image needs at least one row and one column: ``H == 0`` or ``W == 0`` is an
+  error (:func:`nonempty`), raised at trace time like every shape error —
+  ``rgb: expected a non-empty image (..., H, W, 3) with H, W >= 1, got shape (0, 8, 3)``.
+  A batch axis of size 0 is not: ``(0, H, W, 3)`` frames give an empty batch of results,
+  as ``jax.vmap`` and NumPy do. Functions of values rather than images (per-value formulas
+  of any shape such as :func:`hdrjax.display.srgb_encode`, per-pixel ones of shape
+  ``(..., 3)`` such as :func:`hdrjax.luminance`, and percentiles of a pooled set) take
+  empty arrays as NumPy ufuncs do: an empty result of the matching shape (NaN percentiles:
+  no value qualifies).
 """
 
 import numbers
@@ -86,8 +95,27 @@ def shape(
     bad_rank = len(s) != ndim if ndim is not None else len(s) < min_ndim
     if bad_rank or (channels is not None and (not s or s[-1] != channels)):
         raise ValueError(f"{name}: expected shape {form(channels, ndim, min_ndim)}, got shape {s}")
+    if (ndim or min_ndim) >= 3:  # the form has H and W
+        nonempty(s, name, form(channels, ndim, min_ndim))
     real(x, name)
     return s
+
+
+def nonempty(
+    s: Sequence[int], name: str, expected: str = "(..., H, W, 3)", axes: Sequence[int] = (-3, -2)
+) -> None:
+    """Raise unless the image axes ``axes`` of shape ``s`` (``H`` and ``W``: by default the
+    two before the channels) have at least one element each; a batch axis may be 0.
+
+    ``expected`` is the form the message states, e.g. ``(..., H, W, 3)`` or ``(H, W)``.
+    Reads only the shape (static under ``jax.jit``): the error comes at trace time, before
+    anything compiles.
+    """
+    s = tuple(int(v) for v in s)
+    if any(s[a] < 1 for a in axes if -len(s) <= a < len(s)):
+        raise ValueError(
+            f"{name}: expected a non-empty image {expected} with H, W >= 1, got shape {s}"
+        )
 
 
 def cube(
@@ -97,11 +125,15 @@ def cube(
     and dtype; return the shape."""
     s = tuple(int(v) for v in np.shape(faces))
     ok = (len(s) >= 4 if batch else len(s) == 4) and s[-4] == 6 and s[-3] == s[-2]
+    c = "C" if channels is None else str(channels)
+    lead = "..., " if batch else ""
     if not ok or (channels is not None and s[-1] != channels):
-        c = "C" if channels is None else str(channels)
-        lead = "..., " if batch else ""
         raise ValueError(
             f"{name}: expected cube faces of shape ({lead}6, S, S, {c}), got shape {s}"
+        )
+    if s[-3] < 1:
+        raise ValueError(
+            f"{name}: expected non-empty cube faces ({lead}6, S, S, {c}) with S >= 1, got shape {s}"
         )
     real(faces, name)
     return s
@@ -113,8 +145,13 @@ def image_size(size: Any, name: str = "shape") -> tuple[int, int]:
         s = tuple(int(v) for v in size)
     except TypeError:
         s = ()
-    if len(s) not in (2, 3) or (len(s) == 3 and s[2] != 3) or min(s[:2], default=0) < 1:
+    if len(s) not in (2, 3) or (len(s) == 3 and s[2] != 3):
         raise ValueError(f"{name}: expected an image size (H, W) or (H, W, 3), got {size!r}")
+    if min(s[:2]) < 1:
+        raise ValueError(
+            f"{name}: expected a non-empty image size (H, W) or (H, W, 3) with H, W >= 1,"
+            f" got {size!r}"
+        )
     return s[0], s[1]
 
 
@@ -195,6 +232,7 @@ __all__ = [
     "form",
     "image_size",
     "in_range",
+    "nonempty",
     "one_of",
     "positive",
     "real",

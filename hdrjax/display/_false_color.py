@@ -290,8 +290,8 @@ def _auto_range(v, log: bool, percentiles) -> tuple[float, float]:
     v = jnp.asarray(v)
     if not jnp.issubdtype(v.dtype, jnp.floating):
         v = v.astype(jnp.result_type(float))
-    lo, hi = (float(t) for t in _data_range(v, log, percentiles))
-    if not (np.isfinite(lo) and np.isfinite(hi)):  # no usable value
+    lo, hi = (float(t) for t in _data_range(v, log, percentiles)) if v.size else (np.nan,) * 2
+    if not (np.isfinite(lo) and np.isfinite(hi)):  # no usable value (or no value at all)
         return (1.0, 10.0) if log else (0.0, 1.0)
     if hi <= lo:
         if log:
@@ -451,6 +451,7 @@ def false_color(
         [[1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
     """
     _check.real(values, "values")
+    _check.nonempty(np.shape(values), "values", "(..., H, W)", (-2, -1))
     scale = false_color_scale(values, **options)
     image = scale(values)
     v = jnp.asarray(values)

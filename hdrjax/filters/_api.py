@@ -53,9 +53,10 @@ def check_layout(x: Array, channel_axis: int | None) -> None:
     if channel_axis not in (-1, None):
         raise ValueError(f"channel_axis: expected -1 (channels last) or None, got {channel_axis!r}")
     need = 2 if channel_axis is None else 3
+    what = "(..., H, W)" if channel_axis is None else "(..., H, W, C)"
     if x.ndim < need:
-        what = "(..., H, W)" if channel_axis is None else "(..., H, W, C)"
         raise ValueError(f"image: expected shape {what}, got {x.shape}")
+    _check.nonempty(x.shape, "image", what, (-2, -1) if channel_axis is None else (-3, -2))
 
 
 @functools.cache

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _check
 from ._atomic import atomic_path
 
 DISPLAY_FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tif": "tiff", ".tiff": "tiff"}
@@ -48,8 +49,9 @@ def to_code_values(display: np.ndarray, bits: int) -> np.ndarray:
     a = np.asarray(display)
     if a.ndim == 2:
         a = a[:, :, None]
-    if a.ndim != 3 or a.shape[2] not in (1, 3, 4) or a.shape[0] < 1 or a.shape[1] < 1:
+    if a.ndim != 3 or a.shape[2] not in (1, 3, 4):
         raise ValueError(f"display image: expected (H, W), (H, W, 3) or (H, W, 4), got {a.shape}")
+    _check.nonempty(np.shape(display), "display image", "(H, W), (H, W, 3) or (H, W, 4)", (0, 1))
     top = (1 << bits) - 1
     if a.dtype == np.uint8:
         return a if bits == 8 else a.astype(np.uint16) * np.uint16(257)

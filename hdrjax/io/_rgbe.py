@@ -337,10 +337,7 @@ def _pixel_buffer(data: bytes | memoryview, name: str) -> tuple[dict, np.ndarray
         buf = np.frombuffer(data, dtype=np.uint8, offset=off)
     else:
         buf = np.zeros(0, np.uint8)
-    # Smallest possible pixel data: every scanline at least 4 header bytes + 2 bytes per
-    # 127 pixels per component; refuse before allocating anything for absurd headers.
-    min_bytes = nscan * (4 + 8 * -(-length // 127))
-    if buf.size < min(min_bytes, nscan * length * 4):
+    if buf.size < _min_pixel_bytes(nscan, length):
         raise ReadError(
             f"{name}: truncated Radiance file ({buf.size} bytes of pixel data for a "
             f"{w} x {h} image)"
@@ -533,6 +530,13 @@ def encode_rgbe(
     return b"".join(chunks)
 
 
+def _min_pixel_bytes(nscan: int, length: int) -> int:
+    """The fewest bytes ``nscan`` scanlines of ``length`` pixels can take: every RLE
+    scanline has 4 header bytes + 2 bytes per 127 pixels per component (or flat pixels,
+    when fewer); absurd headers are refused with this before anything is allocated."""
+    return min(nscan * (4 + 8 * -(-length // 127)), nscan * length * 4)
+
+
 def _max_pixel_bytes(nscan: int, length: int) -> int:
     """The most bytes ``nscan`` scanlines of ``length`` pixels can take: flat pixels, or
     new RLE scanlines made of literals only (a count byte per 128 bytes)."""
@@ -581,6 +585,11 @@ def read_rgbe_file(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
             length = info["width"] + info["height"] - nscan
             limit = off + _max_pixel_bytes(nscan, length)
             size = os.fstat(f.fileno()).st_size
+            if 0 < size < off + _min_pixel_bytes(nscan, length):
+                raise ReadError(
+                    f"{path.name}: truncated Radiance file ({size - off} bytes of pixel data "
+                    f"for a {info['width']} x {info['height']} image)"
+                )
             data = _read_rest(f, data, min(limit, size) if size > 0 else limit)
     except OSError as e:
         raise OSError(f"{path.name}: cannot read ({e.strerror or e})") from None

@@ -34,10 +34,7 @@ def cubemap_equirect(
     faces: Float[ArrayLike, "*batch 6 S S 3"], height: int | None = None
 ) -> Float[Array, "*batch h w 3"]:
     """The equirectangular map :func:`detect_cubemap` searches (``height`` default ``2 S``)."""
-    _check.real(faces, "faces")
-    shape = jax.numpy.shape(faces)
-    if len(shape) < 4 or shape[-4] != 6 or shape[-3] != shape[-2] or shape[-1] != 3:
-        raise ValueError(f"faces: expected (..., 6, S, S, 3) cube faces, got shape {shape}")
+    shape = _check.cube(faces, "faces")
     h = 2 * int(shape[-2]) if height is None else int(height)
     if h < 2:
         raise ValueError(f"height: expected an integer >= 2, got {height!r}")

@@ -1078,9 +1078,8 @@ def _image_shape(image: ArrayLike, name: str) -> tuple[tuple[int, ...], int, int
     shape = np.shape(image)
     if len(shape) < 3 or shape[-1] != 3:
         raise ValueError(f"{name}: expected channels-last RGB (..., H, W, 3), got shape {shape}")
-    batch = tuple(int(v) for v in shape[:-3])
-    if math.prod(batch) == 0:
-        raise ValueError(f"{name}: empty batch {batch}")
+    _check.nonempty(shape, name)
+    batch = tuple(int(v) for v in shape[:-3])  # may be empty (0 frames: 0 light sets)
     return batch, int(shape[-3]), int(shape[-2])
 
 

@@ -53,6 +53,7 @@ def as_float_image(rgb: ArrayLike) -> Array:
     rgb = jnp.asarray(rgb)
     if rgb.ndim < 3 or rgb.shape[-1] != 3:
         raise ValueError(f"rgb: expected an image of shape (..., H, W, 3), got {rgb.shape}")
+    _check.nonempty(rgb.shape, "rgb")
     if not jnp.issubdtype(rgb.dtype, jnp.floating) or rgb.dtype in (jnp.float16, jnp.bfloat16):
         rgb = rgb.astype(jnp.result_type(float))
     return rgb

@@ -17,8 +17,9 @@ DEFAULT_TILE = (1024, 1024)
 def check_image(image) -> tuple[int, ...]:
     _check.real(image, "image")
     shape = tuple(int(s) for s in np.shape(image))
-    if len(shape) not in (2, 3) or shape[0] < 1 or shape[1] < 1:
+    if len(shape) not in (2, 3):
         raise ValueError(f"image: expected shape (H, W) or (H, W, C), got {shape}")
+    _check.nonempty(shape, "image", "(H, W) or (H, W, C)", (0, 1))
     return shape
 
 

@@ -195,12 +195,12 @@ class Budak2005(eqx.Module):
 
     def readapt(self, rgb: Float[ArrayLike, "H W 3"]) -> Float[Array, "H W 3"]:
         """Linear display RGB in cd/m² (before clipping and gamma)."""
-        return _readapt(self, check_rgb(rgb))
+        return _readapt(self, check_rgb(rgb, pooled=True))
 
     def __call__(self, rgb: Float[ArrayLike, "H W 3"]) -> Float[Array, "H W 3"]:
         """Display values in [0, 1]: :func:`hdrjax.display.gamma_encode` of the re-adapted
         image over ``display_max`` (it clips to [0, 1] and encodes NaN as 0)."""
-        return _display(self, check_rgb(rgb))
+        return _display(self, check_rgb(rgb, pooled=True))
 
     def _readapt(self, rgb: Array) -> Array:
         x, ok = sanitize(rgb)

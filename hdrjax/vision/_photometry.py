@@ -39,8 +39,12 @@ def _as_float(x: ArrayLike) -> Array:
     return x
 
 
-def check_rgb(rgb: ArrayLike, name: str = "rgb", *, image: bool = False) -> Array:
-    """``rgb`` as a float array with 3 channels last (and 3 dims when ``image``)."""
+def check_rgb(
+    rgb: ArrayLike, name: str = "rgb", *, image: bool = False, pooled: bool = False
+) -> Array:
+    """``rgb`` as a float array with 3 channels last (and 3 dims when ``image``). An image
+    (``image``), or pixels a function pools statistics over (``pooled``), needs H, W >= 1;
+    per-pixel functions take empty arrays (an empty result)."""
     _check.real(rgb, name)
     rgb = _as_float(rgb)
     if rgb.ndim < 1 or rgb.shape[-1] != 3:
@@ -50,8 +54,8 @@ def check_rgb(rgb: ArrayLike, name: str = "rgb", *, image: bool = False) -> Arra
             f"{name}: expected one image of shape (H, W, 3), got shape {rgb.shape}; "
             "use jax.vmap for batches"
         )
-    if image and (rgb.shape[0] < 1 or rgb.shape[1] < 1):
-        raise ValueError(f"{name}: empty image of shape {rgb.shape}")
+    if image or pooled:
+        _check.nonempty(rgb.shape, name, "(H, W, 3)")
     return rgb
 
 

@@ -30,8 +30,8 @@ Policies the generic tests check (the numeric contract every module docstring st
   threshold ``inf``).
 
 Bad input (``test_bad_input.py``, policy in ``hdrjax/_check.py``): every case is fed each
-form of :data:`BAD_INPUTS` (wrong rank, wrong channel count, integer/bool/complex dtype) and
-must raise a one-line ``ValueError`` naming the argument and the expected form — unless the
+form of :data:`BAD_INPUTS` (wrong rank, wrong channel count, integer/bool/complex dtype, no
+rows or no columns) and must raise a one-line ``ValueError`` naming the argument and the expected form — unless the
 case declares the form in ``accepts`` with its reason and a reference for the result.
 Integer and bool images are promoted to float by policy (:data:`PROMOTED`): the result must
 equal the result for the same values as float32. ``params`` lists out-of-range parameters
@@ -128,7 +128,11 @@ BAD_INPUTS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
     "int": lambda g: np.round(g).astype(np.int32),
     "bool": lambda g: g > 1.0,
     "complex": lambda g: g.astype(np.complex64),
+    # empty: no rows (0, W, 3), no columns (H, 0, 3) — policy of hdrjax/_check.py
+    "empty_rows": lambda g: g[:0],
+    "empty_cols": lambda g: g[:, :0],
 }
+EMPTY_FORMS = ("empty_rows", "empty_cols")
 
 PROMOTED = {
     "int": "integer images are promoted to the default float, as NumPy ufuncs do",
@@ -149,6 +153,10 @@ def channels_of(out, kind):
         return out[..., :1]
     if kind == "channels4":
         return np.concatenate([out, out[..., :1]], axis=-1)
+    if kind == "empty_rows":
+        return out[:0]
+    if kind == "empty_cols":
+        return out[:, :0]
     raise KeyError(kind)
 
 
@@ -183,11 +191,20 @@ SAME_PATH = None
 """A reference of ``None``: the form takes the code path whose values another form or case
 checks; the test compares output shapes and dtypes (``jax.eval_shape``, no compile)."""
 
+EMPTY_PER_PIXEL = {
+    k: (
+        "a function of each pixel (or value) takes an empty array, as NumPy ufuncs do: an"
+        " empty result, whose shape and dtype are all there is to check",
+        SAME_PATH,
+    )
+    for k in EMPTY_FORMS
+}
 ELEMENTWISE = {
     "rank2": ("a formula applied to each value: any shape", per_value),
     "channels4": ("a formula applied to each value: any shape", per_value),
     "rank1": ("a formula applied to each value: any shape (values: rank2)", SAME_PATH),
     "channels1": ("a formula applied to each value: any shape (values: rank2)", SAME_PATH),
+    **EMPTY_PER_PIXEL,
 }
 PER_CHANNEL = {
     k: ("filters act on each channel: any channel count C (channels last)", per_value)
@@ -201,6 +218,13 @@ RESAMPLE = {
     "channels4": ("resampling interpolates each channel: any channel count C", per_value),
     "channels1": ("resampling interpolates each channel (values: channels4)", SAME_PATH),
 }
+
+
+def _nan_like(fn, good, kind):
+    """Reference for statistics of an empty pool: NaN in the shapes and dtypes of the
+    outputs for the good image (traced by ``jax.eval_shape``, not compiled)."""
+    out = jax.eval_shape(fn, jax.ShapeDtypeStruct(good.shape, good.dtype))
+    return [np.full(v.shape, np.nan, v.dtype) for v in jax.tree_util.tree_leaves(out)]
 
 
 def _abs(x):
@@ -810,6 +834,29 @@ for _n in CASES:
 _ACCEPTS: dict[str, Mapping[str, tuple[str, Callable]]] = {
     **{n: ELEMENTWISE for n in _ELEMENTWISE_CASES},
     **{n: RESAMPLE for n in CASES if n.startswith("panorama.")},
+    # per-pixel functions of (..., 3) (their adaptation given, not measured): empty in,
+    # empty out; every other image function rejects an empty H or W
+    **{
+        n: EMPTY_PER_PIXEL
+        for n in (
+            "luminance",
+            "vision.scotopic_luminance",
+            "vision.blue_shift",
+            "vision.colour_loss",
+            "vision.contrast",
+        )
+    },
+    # percentiles of a pooled set: an empty pool has no value that qualifies (documented NaN)
+    **{
+        n: {
+            k: (
+                "percentiles of no value are NaN, as documented for no qualifying pixel",
+                _nan_like,
+            )
+            for k in EMPTY_FORMS
+        }
+        for n in ("stats.percentile", "stats.percentile_exact")
+    },
 }
 for _n in CASES:
     if _n in ("filters.mean_filter[nearest]", "filters.median_filter[channels,nearest]"):

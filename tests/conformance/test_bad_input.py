@@ -1,6 +1,6 @@
 """Bad input gets a clear error: every case of the conformance table (``_table.py``) is fed an
-image of the wrong rank, the wrong channel count and a wrong dtype, and every out-of-range
-parameter the table lists for it.
+image of the wrong rank, the wrong channel count, a wrong dtype and no rows or no columns,
+and every out-of-range parameter the table lists for it.
 
 A bad form must raise a one-line ``ValueError`` that starts with the argument's name and
 states the expected form (``rgb: expected shape (..., H, W, 3), got shape (8, 8)``), before
@@ -20,13 +20,21 @@ import pytest
 
 from ..conftest import RTOL32
 from ..operators.cases import natural
-from ._table import BAD_INPUTS, CASES, PROMOTED, channels_of, float_leaves, per_value
+from ._table import (
+    BAD_INPUTS,
+    CASES,
+    EMPTY_FORMS,
+    PROMOTED,
+    channels_of,
+    float_leaves,
+    per_value,
+)
 from .test_coverage import public_callables
 
 GOOD = natural((8, 8))
 """The good image the bad forms are made from: float32 (8, 8, 3), positive, 17 stops."""
 
-SHAPE_FORMS = ("rank2", "rank1", "channels4", "channels1")
+SHAPE_FORMS = ("rank2", "rank1", "channels4", "channels1", *EMPTY_FORMS)
 
 PROMOTION_VALUES = {
     # one traced case per promotion path (compiles: the others are traced, not compiled)
@@ -90,6 +98,9 @@ def _check_message(msg: str, name: str | None, kind: str | None = None) -> None:
     assert "got" in msg or "valid" in msg, f"does not say what it got: {msg!r}"
     if kind in SHAPE_FORMS:
         assert re.search(r"\(.*\)", msg), f"no shape form: {msg!r}"
+    if kind in EMPTY_FORMS:  # says what it needs, and the empty shape it got
+        assert re.search(r"non-empty|>= ?[12]|at least", msg), f"no minimum size: {msg!r}"
+        assert re.search(r"got (shape )?\((\d+, )*0(, \d+)*\)", msg), f"no empty shape: {msg!r}"
     elif kind is not None:
         assert "real" in msg or "float" in msg, f"no dtype form: {msg!r}"
 
