@@ -98,11 +98,11 @@ def _check_message(msg: str, name: str | None, kind: str | None = None) -> None:
     assert "got" in msg or "valid" in msg, f"does not say what it got: {msg!r}"
     if kind in SHAPE_FORMS:
         assert re.search(r"\(.*\)", msg), f"no shape form: {msg!r}"
+    elif kind is not None:
+        assert "real" in msg or "float" in msg, f"no dtype form: {msg!r}"
     if kind in EMPTY_FORMS:  # says what it needs, and the empty shape it got
         assert re.search(r"non-empty|>= ?[12]|at least", msg), f"no minimum size: {msg!r}"
         assert re.search(r"got (shape )?\((\d+, )*0(, \d+)*\)", msg), f"no empty shape: {msg!r}"
-    elif kind is not None:
-        assert "real" in msg or "float" in msg, f"no dtype form: {msg!r}"
 
 
 def _assert_same(got, want, what):
