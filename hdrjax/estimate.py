@@ -56,7 +56,7 @@ _Method = Literal["histogram", "exact"]
 
 
 def _image(image: ArrayLike) -> Array:
-    x = as_float_image(image)
+    x = as_float_image(image, "image")
     if x.ndim != 3:
         raise ValueError(f"image: expected one image (H, W, 3), got shape {x.shape}; use vmap")
     return x

@@ -69,7 +69,7 @@ def tone_curve(
     for n, v in (("bins", bins), ("points", points)):
         if not int(v) >= 2:
             raise ValueError(f"{n}: expected an integer >= 2, got {v!r}")
-    rgb = as_float_image(image)
+    rgb = as_float_image(image, "image")
     if rgb.ndim != 3:
         raise ValueError(f"image: expected one image (H, W, 3), got {rgb.shape}")
     w = np.asarray(op.weights_, np.float64)

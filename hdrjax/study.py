@@ -230,7 +230,7 @@ def sweep(
     if batch_size is not None and not int(batch_size) >= 1:
         raise ValueError(f"batch_size: expected an integer >= 1 or None, got {batch_size!r}")
     values = _grid_values(op, grid)
-    image = as_float_image(image)
+    image = as_float_image(image, "image")
     if image.ndim != 3:
         raise ValueError(f"image: expected one image (H, W, 3), got {image.shape}")
     names = tuple(values)

@@ -124,15 +124,15 @@ def _effects(args: argparse.Namespace):
     from ..vision._simulate import effect_name
 
     try:
-        forced = {effect_name(e): True for e in args.force_on}
-        forced.update({effect_name(e): False for e in args.force_off})
+        forced = {effect_name(e, "--with"): True for e in args.force_on}
+        forced.update({effect_name(e, "--without"): False for e in args.force_off})
         if args.effects.strip().lower() != "auto":
             if forced:
                 raise UsageError("--with/--without apply to --effects auto only")
             names = [e for e in args.effects.split(",") if e.strip()]
             if args.effects.strip().lower() in ("all", "none"):
                 return args.effects.strip().lower()
-            return [effect_name(e) for e in names]
+            return [effect_name(e, "--effects") for e in names]
     except ValueError as e:
         raise UsageError(str(e)) from None
     return forced or "auto"
@@ -192,14 +192,14 @@ def run(args: argparse.Namespace) -> int:
         d = report.to_dict()
         d["input"] = args.input
         if out is not None:
-            d["applied"] = list(vision._simulate.select_effects(effects, report))
+            d["applied"] = list(report.selected)  # simulate's report: what it applied
         print(json.dumps(d, indent=1))
     else:
         print(f"input: {args.input}")
         print(report)
     if out is None:
         return 0
-    applied = vision._simulate.select_effects(effects, report)
+    applied = report.selected
     if ext in LDR_EXT:
         from .. import display, tonemap
 

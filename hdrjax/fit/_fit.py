@@ -401,7 +401,8 @@ def _setup(
     fields = {f.name for f in dataclasses.fields(op) if not f.metadata.get("static", False)}
     if not names:
         raise ValueError(
-            f"{op.name}: no parameters to fit; pass params=(...) from {sorted(fields)}"
+            f"params: expected names of parameters to fit from {sorted(fields)}, got none"
+            f" (every parameter of {op.name} is set, so none is fitted by default)"
         )
     bad = [n for n in names if n not in fields]
     if bad or len(set(names)) != len(names):
@@ -497,7 +498,7 @@ def fit(
     (True, 0.3)
     """
     prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
-    image = as_float_image(image)
+    image = as_float_image(image, "image")
     if image.ndim != 3:
         raise ValueError(f"image: expected (H, W, 3), got {image.shape}; use fit_batch")
     return _fit_jit(prob, op, image, target, solver, int(max_steps), max_size, bool(throw))
@@ -539,7 +540,7 @@ def fit_batch(
         A batched :class:`FitResult`.
     """
     prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
-    frames = as_float_image(frames)
+    frames = as_float_image(frames, "frames")
     if frames.ndim != 4:
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
     if vectorize is None:
@@ -597,7 +598,7 @@ def fit_sequence(
         penalty); ``steps`` and ``result`` are the joint solve's, repeated per frame.
     """
     prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
-    frames = as_float_image(frames)
+    frames = as_float_image(frames, "frames")
     if frames.ndim != 4:
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
     if not float(smoothness) >= 0:

@@ -180,8 +180,6 @@ def _plan(
     max_candidates: int | None,
     weights: Sequence[float] | None,
 ) -> _Plan:
-    if in_h < 2 or in_w < 4:
-        raise ValueError(f"map: expected at least 2 rows and 4 columns, got {in_h}x{in_w}")
     if not (math.isfinite(blur) and blur >= 0):
         raise ValueError(f"blur: expected a finite number >= 0, got {blur!r}")
     if not (math.isfinite(max_radius) and max_radius > 0):
@@ -1080,7 +1078,13 @@ def _image_shape(image: ArrayLike, name: str) -> tuple[tuple[int, ...], int, int
         raise ValueError(f"{name}: expected channels-last RGB (..., H, W, 3), got shape {shape}")
     _check.nonempty(shape, name)
     batch = tuple(int(v) for v in shape[:-3])  # may be empty (0 frames: 0 light sets)
-    return batch, int(shape[-3]), int(shape[-2])
+    h, w = int(shape[-3]), int(shape[-2])
+    if h < 2 or w < 4:
+        raise ValueError(
+            f"{name}: expected at least 2 rows and 4 columns (..., H >= 2, W >= 4, 3),"
+            f" got shape {shape}"
+        )
+    return batch, h, w
 
 
 @functools.partial(jax.jit, static_argnames=("plan", "batch"))

@@ -14,6 +14,7 @@ one whose luminance is -Inf or ≤ 0 is black. Statistics use finite pixels only
 
 import abc
 import dataclasses
+import inspect
 import math
 import re
 from collections.abc import Callable
@@ -47,13 +48,14 @@ def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
     return eqx.field(static=True, default=default, converter=lambda w: tuple(float(v) for v in w))
 
 
-def as_float_image(rgb: ArrayLike) -> Array:
-    """Validate ``(..., H, W, 3)`` and promote to float32/float64 (float16/ints → float32)."""
-    _check.real(rgb, "rgb")
+def as_float_image(rgb: ArrayLike, name: str = "rgb") -> Array:
+    """Validate ``(..., H, W, 3)`` and promote to float32/float64 (float16/ints → float32).
+    ``name``: the caller's argument name, which the messages start with."""
+    _check.real(rgb, name)
     rgb = jnp.asarray(rgb)
     if rgb.ndim < 3 or rgb.shape[-1] != 3:
-        raise ValueError(f"rgb: expected an image of shape (..., H, W, 3), got {rgb.shape}")
-    _check.nonempty(rgb.shape, "rgb")
+        raise ValueError(f"{name}: expected an image of shape (..., H, W, 3), got {rgb.shape}")
+    _check.nonempty(rgb.shape, name)
     if not jnp.issubdtype(rgb.dtype, jnp.floating) or rgb.dtype in (jnp.float16, jnp.bfloat16):
         rgb = rgb.astype(jnp.result_type(float))
     return rgb
@@ -301,15 +303,53 @@ def parameter_names(cls: type[AbstractOperator]) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(cls) if f.init)
 
 
+def required_parameters(cls: type[AbstractOperator]) -> tuple[str, ...]:
+    """The parameters an operator cannot estimate: those without a default (a table)."""
+    return tuple(
+        f.name
+        for f in dataclasses.fields(cls)
+        if f.init and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    )
+
+
+def parameter_help(cls: type[AbstractOperator], name: str) -> str:
+    """The description of parameter ``name`` in the ``Attributes:`` section of the
+    operator's docstring, on one line (empty when it has none)."""
+    doc = inspect.cleandoc(cls.__doc__ or "")
+    m = re.search(r"^Attributes:\n((?:[ \t]+.*\n?|\n)*)", doc, re.M)
+    if m is None:
+        return ""
+    entry = re.search(
+        rf"^([ \t]+)(?:\w+, )*{re.escape(name)}(?:, \w+)*(?: \(.*?\))?:(.*(?:\n\1[ \t]+.*)*)",
+        m[1],
+        re.M,
+    )
+    return " ".join(entry[2].split()).rstrip(".") if entry else ""
+
+
 def make_operator(method: str, **params: Any) -> AbstractOperator:
-    """Instantiate a registered operator; unknown parameters raise ``ValueError``."""
+    """Instantiate a registered operator.
+
+    Raises:
+        ValueError: an unknown ``method`` or parameter (the message lists the valid ones),
+            or a missing required parameter (named, with what it expects).
+    """
     cls = get_operator(method)
     valid = parameter_names(cls)
     bad = sorted(set(params) - set(valid))
     if bad:
         raise ValueError(
-            f"{cls.name}: unknown parameter(s) {', '.join(bad)}; valid: {', '.join(valid)}"
+            f"{bad[0]}: not a parameter of {cls.name}; valid: {', '.join(valid)}"
+            if len(bad) == 1
+            else f"{', '.join(bad)}: not parameters of {cls.name}; valid: {', '.join(valid)}"
         )
+    for name in required_parameters(cls):
+        if params.get(name) is None:
+            what = parameter_help(cls, name).split("; ")[0] or "a value"
+            raise ValueError(
+                f"{name}: expected {what} (the {cls.name} operator needs it: it cannot be"
+                " estimated from the image), got none"
+            )
     return cls(**params)
 
 

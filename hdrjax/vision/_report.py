@@ -109,7 +109,9 @@ class SceneReport:
         dynamic_range: ``ln(luminance_max/luminance_min)`` (pcond's histogram range).
         n_pixels: number of pixels; n_nonfinite: pixels whose luminance is NaN or ±Inf.
         glare_variant: Spencer PSF variant for the global adaptation.
-        selected: names of the effects that apply, in application order.
+        selected: names of the effects, in application order: from :func:`analyze`, those
+            pcond's rules select; from :func:`simulate`, those it applied (its ``effects``
+            argument may override the rules).
         decisions: one :class:`Decision` per effect, in application order.
 
     Deferred p05: :func:`hdrjax.vision.simulate` decides the percentile rules from the
@@ -184,6 +186,11 @@ class SceneReport:
         ]
         for d in self.decisions.values():
             lines.append(f"  {d.name:<12} {'yes' if d.applies else 'no':<8} {d.reason}")
+        if self.selected != tuple(n for n, d in self.decisions.items() if d.applies):
+            lines.append(
+                f"  effects simulated: {', '.join(self.selected) or 'none'} (chosen by the"
+                " effects argument, not by these rules)"
+            )
         return "\n".join(lines)
 
 

@@ -21,6 +21,7 @@ Relative images: an array has no units, so :func:`simulate` and :func:`analyze` 
 relative one needs ``scale`` or its ``white_luminance``.
 """
 
+import dataclasses
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Literal
 
@@ -63,12 +64,13 @@ _ALIASES = {
 }
 
 
-def effect_name(name: str) -> str:
-    """Canonical effect name (case- and separator-insensitive; ``color`` = ``colour``)."""
+def effect_name(name: str, arg: str = "effects") -> str:
+    """Canonical effect name (case- and separator-insensitive; ``color`` = ``colour``);
+    ``arg``: the caller's argument (or option) the name came from, for the message."""
     key = str(name).strip().lower().replace("-", "_").replace(" ", "_")
     key = _ALIASES.get(key, _ALIASES.get(key.replace("_", ""), key))
     if key not in EFFECTS:
-        raise ValueError(f"unknown effect {name!r}; valid: {', '.join(EFFECTS)}")
+        raise ValueError(f"{arg}: unknown effect {name!r}; valid: {', '.join(EFFECTS)}")
     return key
 
 
@@ -427,9 +429,11 @@ def simulate(
     Returns:
         ``(rgb, report)``: RGB in cd/m² (display cd/m² after ``contrast``), or the
         operator's display-referred RGB with ``then``, and the :class:`SceneReport` (its
-        5th percentile found on first use when the range decided the rules). Not
-        traceable itself (the report decides what to compile); use
-        :meth:`HumanVision.build` under ``jax.jit``/``vmap``/``grad``.
+        5th percentile found on first use when the range decided the rules), whose
+        ``selected`` names the effects applied (the rules' choice as ``effects`` overrode
+        it; ``decisions`` keep the rules' verdicts). Not traceable itself (the report
+        decides what to compile); use :meth:`HumanVision.build` under
+        ``jax.jit``/``vmap``/``grad``.
     """
     rgb, ch = absolute_rgb(image, scale, chromaticities)
     if isinstance(rgb, jax.core.Tracer):
@@ -448,14 +452,15 @@ def simulate(
         shown, L, *stats = _analyze_and_tonemap(op, rgb, weights, block, pixel_stride(block))
         report = fast_report(rv, L, *stats, defer_p05=True)
         if report is not None and not select_effects(effects, report):
-            return shown, report  # a clean image that calls for nothing: already mapped
+            # a clean image that calls for nothing: already mapped
+            return shown, _applied(report, ())
         if report is None:
             report = masked_report(rv, L)
     if report is None:
         report = analyze_rgb(rgb, rv, weights, defer_p05=True)
     names = select_effects(effects, report)
     if not names:  # nothing selected: nothing traced, nothing computed
-        return (rgb if op is None else op(rgb)), report
+        return (rgb if op is None else op(rgb)), _applied(report, ())
     fov = report.adaptation_foveal
     fmin = float(np.min(fov)) if fov.size else LMIN
     step = HumanVision.build(
@@ -474,7 +479,15 @@ def simulate(
         dtype=rgb.dtype,
     )
     out = step(rgb)
-    return (out if op is None else op(out)), report
+    return (out if op is None else op(out)), _applied(report, step.effects)
+
+
+def _applied(report: SceneReport, names: tuple[str, ...]) -> SceneReport:
+    """The report with ``selected`` = the effects the step was built with (``effects=`` may
+    override the rules' choice; ``decisions`` keep the rules' verdicts)."""
+    if report.selected == names:
+        return report
+    return dataclasses.replace(report, selected=names)
 
 
 __all__ = [

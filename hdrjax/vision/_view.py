@@ -150,6 +150,12 @@ def as_view(view: "View | float | int | None") -> View:
     if isinstance(view, View):
         return view
     if isinstance(view, int | float) and not isinstance(view, bool):
+        # checked here, so that the message names the argument the caller passed
+        if not 0 < view < 180:
+            raise ValueError(
+                "view: expected a horizontal field of view (hfov) in (0, 180) degrees, or a"
+                f" View (projection='equiangular' for panoramas), got {view!r}"
+            )
         return View(hfov=float(view))
     raise ValueError(f"view: expected a View, a field of view in degrees or None, got {view!r}")
 

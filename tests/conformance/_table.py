@@ -744,18 +744,18 @@ _PARAMS: dict[str, tuple[tuple[str, Callable], ...]] = {
         ("display_max", lambda x: hv.contrast(_cd(x), 10.0, display_max=-1.0)),
         ("model", lambda x: hv.contrast(_cd(x), 10.0, model="ward")),
     ),
-    # a view given as a number is its horizontal field of view: the message names hfov
-    "vision.sample_spacing": (("hfov", lambda x: hv.sample_spacing(_cd(x), -0.5)),),
+    # a view given as a number is its horizontal field of view: the message names view
+    "vision.sample_spacing": (("view", lambda x: hv.sample_spacing(_cd(x), -0.5)),),
     "vision.acuity_loss": (
-        ("hfov", lambda x: hv.acuity_loss(_cd(x), 0.0)),
+        ("view", lambda x: hv.acuity_loss(_cd(x), 0.0)),
         ("levels", lambda x: hv.acuity_loss(_cd(x), 30.0, levels=-1)),
     ),
     "vision.glare": (
-        ("hfov", lambda x: hv.glare(_cd(x), -30.0)),
+        ("view", lambda x: hv.glare(_cd(x), -30.0)),
         ("radius_deg", lambda x: hv.glare(_cd(x), 30.0, radius_deg=-1.0)),
         ("variant", lambda x: hv.glare(_cd(x), 30.0, variant="daylight")),
     ),
-    "vision.veil": (("hfov", lambda x: hv.veil(_cd(x), -30.0)),),
+    "vision.veil": (("view", lambda x: hv.veil(_cd(x), -30.0)),),
     "vision.perceptual_reproduction": (
         ("display_max", lambda x: hv.perceptual_reproduction(_cd(x), display_max=-1.0)),
         ("gamma", lambda x: hv.perceptual_reproduction(_cd(x), gamma=0.0)),
@@ -823,8 +823,8 @@ for _n in CASES:
             _PARAMS[_n] += (("criterion", lambda x: hf.median_filter(x, 3, criterion="rank")),)
     elif _n.startswith("vision.HumanVision["):
         _PARAMS[_n] = (
-            ("hfov", lambda x: hv.HumanVision.build(x.shape, -30.0, ("glare",))),
-            ("effect", lambda x: hv.HumanVision.build(x.shape, 30.0, ("glow",))),
+            ("view", lambda x: hv.HumanVision.build(x.shape, -30.0, ("glare",))),
+            ("effects", lambda x: hv.HumanVision.build(x.shape, 30.0, ("glow",))),
         )
     elif _n.startswith("vision.simulate["):
         _PARAMS[_n] = (

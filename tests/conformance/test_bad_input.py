@@ -30,6 +30,7 @@ from ._table import (
     per_value,
 )
 from .test_coverage import public_callables
+from .test_messages import case_parameters
 
 GOOD = natural((8, 8))
 """The good image the bad forms are made from: float32 (8, 8, 3), positive, 17 stops."""
@@ -85,8 +86,11 @@ def _call(case, x):
     return case.fn(jnp.asarray(x)) if case.jit else case.fn(x)
 
 
-def _check_message(msg: str, name: str | None, kind: str | None = None) -> None:
-    """One line, ``name: expected <form>, got <what>`` (or ``name ... needs ...``)."""
+def _check_message(
+    msg: str, name: str | None, kind: str | None = None, case: str | None = None
+) -> None:
+    """One line, ``name: expected <form>, got <what>`` (or ``name ... needs ...``); with
+    ``case``, the name is an argument of the callables that case calls (test_messages.py)."""
     assert "\n" not in msg, f"not one line: {msg!r}"
     first = re.match(r"^(\w+)[: ]", msg)
     assert first, f"does not start with the argument's name: {msg!r}"
@@ -94,6 +98,10 @@ def _check_message(msg: str, name: str | None, kind: str | None = None) -> None:
         assert first[1] in PARAMETER_NAMES, f"{first[1]!r} is no argument name: {msg!r}"
     else:
         assert name in msg, f"does not name {name!r}: {msg!r}"
+    if case is not None:
+        own = case_parameters(case)
+        assert first[1] in own, f"{first[1]!r} is no argument of {case}: {msg!r}"
+        assert name is None or first[1] == name, f"does not start with {name!r}: {msg!r}"
     assert re.search(r"\b(expect(s|ed)?|needs?|must|valid)\b", msg), f"no expected form: {msg!r}"
     assert "got" in msg or "valid" in msg, f"does not say what it got: {msg!r}"
     if kind in SHAPE_FORMS:
@@ -143,7 +151,7 @@ def test_bad_input_form(name, kind):
     else:
         with pytest.raises(ValueError) as err:
             _call(case, bad)
-        _check_message(str(err.value), None, kind)
+        _check_message(str(err.value), None, kind, case=name)
 
 
 PARAMS = [(n, i) for n in sorted(CASES) for i in range(len(CASES[n].params))]
@@ -154,7 +162,7 @@ def test_bad_parameter(name, index):
     arg, call = CASES[name].params[index]
     with pytest.raises(ValueError) as err:
         call(jnp.asarray(GOOD))
-    _check_message(str(err.value), arg)
+    _check_message(str(err.value), arg, case=name)
 
 
 def test_every_form_is_swept():

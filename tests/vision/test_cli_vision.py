@@ -38,6 +38,8 @@ def test_simulate_to_exr_and_png(night_exr, tmp_path, capsys):
     assert code == 0
     text = capsys.readouterr().out
     assert "applied: glare, colour_loss, blue_shift" in text
+    # the report printed says so too (its decisions are the rules', which add contrast)
+    assert "effects simulated: glare, colour_loss, blue_shift (" in text
     sim = hio.read(out).rgb()
     assert sim.shape == rgb.shape and np.isfinite(sim).all()
     assert sim[0, 0].std() < rgb[0, 0].std()  # night colours lost

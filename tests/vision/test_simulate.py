@@ -129,6 +129,35 @@ def test_effect_overrides():
         select_effects({"bloom": True}, rep)
 
 
+def test_report_selects_what_simulate_applied():
+    """issue 16: ``report.selected`` is what ``simulate`` applied, for every form of
+    ``effects``; the image is compared with the named effects applied alone (an explicit
+    set, whose report must name exactly that set), so a report that lists a disabled
+    effect gives another image."""
+    img = night_street()[:32, :64]  # test_effect_overrides' shape: its analysis compile
+    img[12:14, 30:32] = 2e4  # a lamp: glare, besides the night effects
+    rules = hv.analyze(img, 40.0, scale=1.0).selected
+    assert rules[0] == "glare" and {"colour_loss", "contrast"} <= set(rules)
+
+    given = set(rules[1:])  # the night effects without glare (one compile less below)
+    out, rep = hv.simulate(img, 40.0, given, scale=1.0)
+    assert rep.selected == rules[1:]  # the set given, in application order
+    assert f"effects simulated: {', '.join(rules[1:])} (" in str(rep)  # not the rules'
+    out, rep = hv.simulate(img, 40.0, "none", scale=1.0)
+    assert rep.selected == ()
+    np.testing.assert_array_equal(np.asarray(out), img)
+    outs = {}
+    for effects, want in (("auto", rules), ({"glare": False}, rules[1:])):
+        out, rep = hv.simulate(img, 40.0, effects, scale=1.0)
+        assert rep.selected == want, effects
+        alone, _ = hv.simulate(img, 40.0, set(rep.selected), scale=1.0)
+        np.testing.assert_array_equal(np.asarray(out), np.asarray(alone))
+        assert rep.decisions["glare"].applies  # the rules' verdict stays in the report
+        outs[str(effects)] = np.asarray(out)
+    assert "effects simulated" not in str(hv.simulate(img, 40.0, scale=1.0)[1])
+    assert not np.allclose(outs["auto"], outs["{'glare': False}"])  # glare made a difference
+
+
 # -- what gets compiled ------------------------------------------------------------------
 
 
@@ -219,7 +248,9 @@ def test_hard_values(fill):
     assert np.isfinite(out[finite_in]).all()
     np.testing.assert_array_equal(out[~finite_in], img[~finite_in])
     if fill == "zeros":
-        assert rep.selected == () and not np.any(out)
+        # the rules call for nothing in the dark; "all" applied every effect (to zeros)
+        assert not any(d.applies for d in rep.decisions.values()) and not np.any(out)
+        assert rep.selected == hv.EFFECTS
         assert "no pixel" in rep.decisions["glare"].reason
     if fill == "mixed":
         assert rep.n_nonfinite == 2
