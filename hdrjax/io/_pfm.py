@@ -37,6 +37,8 @@ def parse_header(head: bytes, name: str) -> tuple[int, int, int, float, int]:
         raise ReadError(f"{name}: malformed PFM header; expected 'PF|Pf', 'W H', 'scale'")
     magic, w, h, scale_text = m.groups()
     w, h = int(w), int(h)
+    if min(w, h) < 1:
+        raise ReadError(f"{name}: empty PFM image {w} x {h}; expected at least 1 x 1")
     if not (0 < w <= MAX_DIM and 0 < h <= MAX_DIM):
         raise ReadError(f"{name}: absurd PFM image size {w} x {h} (limit {MAX_DIM})")
     try:

@@ -114,6 +114,8 @@ def parse_header(data: bytes | memoryview, name: str) -> tuple[dict, int]:
     if a1 == a2:
         raise ReadError(f"{name}: bad Radiance resolution line (both axes are {a1.decode()})")
     n1, n2 = int(n1), int(n2)
+    if min(n1, n2) < 1:
+        raise ReadError(f"{name}: empty Radiance image {n1} x {n2}; expected at least 1 x 1")
     if not (0 < n1 <= MAX_DIM and 0 < n2 <= MAX_DIM):
         raise ReadError(f"{name}: absurd Radiance image size {n1} x {n2} (limit {MAX_DIM})")
     width, height = (n2, n1) if a1 == b"Y" else (n1, n2)

@@ -461,3 +461,19 @@ def test_every_real_file_matches_sources_md(name, w, h, lo, hi, mean):
     assert float(y.max()) == pytest.approx(hi, rel=RTOL_STATS)
     assert float(y.mean(dtype=np.float64)) == pytest.approx(mean, rel=RTOL_STATS)
     assert img.rgb().shape == (h, w, 3)
+
+
+@pytest.mark.parametrize("shape", [(0, 8, 3), (8, 0), (0, 8, 4)])
+@pytest.mark.parametrize("ext", ["exr", "hdr", "pfm", "png"])
+def test_empty_image_is_not_written(tmp_path, ext, shape):
+    """No format holds an empty image (Radiance and PFM wrote files no reader opens; OpenEXR
+    failed with a multi-line library error): a one-line ValueError naming the argument and
+    the shape, and no file (issue 16.4)."""
+    write = hio.write_display if ext == "png" else hio.write
+    name = "display image" if ext == "png" else "image"
+    with pytest.raises(ValueError) as err:
+        write(tmp_path / f"x.{ext}", np.zeros(shape, np.float32))
+    msg = str(err.value)
+    assert msg.startswith(f"{name}: expected a non-empty image (H, W)"), msg
+    assert msg.endswith(f"with H, W >= 1, got shape {shape}") and "\n" not in msg, msg
+    assert list(tmp_path.iterdir()) == []

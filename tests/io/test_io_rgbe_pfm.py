@@ -158,6 +158,9 @@ def test_xyze_format_is_xyz():
         (b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "truncated Radiance header"),
         (b"#?RADIANCE\n\n-Y 10 *X 10\n", "bad Radiance resolution line"),
         (b"#?RADIANCE\n\n-Y 99999999 +X 99999999\n", "absurd Radiance image size"),
+        # a file that would decode to no rows or no columns (issue 16.4)
+        (b"#?RADIANCE\n\n-Y 0 +X 8\n", "empty Radiance image 0 x 8; expected at least 1 x 1"),
+        (b"#?RADIANCE\n\n-Y 8 +X 0\n", "empty Radiance image 8 x 0; expected at least 1 x 1"),
         (b"#?RADIANCE\n\n-Y 60000 +X 60000\n\x02\x02\xea\x60", "truncated Radiance file"),
         (
             b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n"
@@ -188,6 +191,8 @@ def test_radiance_errors(tmp_path, data, message):
         (b"Pf\n2 2\n-1\n" + b"\0" * 15, "truncated PFM file"),
         (b"PF\n100000 100000\n-1\n" + b"\0" * 12, "truncated PFM file"),
         (b"PF\n9999999 9999999\n-1\n", "absurd PFM image size"),
+        (b"PF\n0 8\n-1\n", "empty PFM image 0 x 8; expected at least 1 x 1"),
+        (b"Pf\n8 0\n-1\n", "empty PFM image 8 x 0; expected at least 1 x 1"),
     ],
 )
 def test_pfm_errors(tmp_path, data, message):
