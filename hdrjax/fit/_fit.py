@@ -40,6 +40,7 @@ import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
+from .. import _check
 from ..operators import make_operator
 from ..operators._base import AbstractOperator, as_float_image
 from ..targets import AbstractTarget
@@ -96,21 +97,24 @@ class FitResult(eqx.Module):
 
 def downscale(image: Float[Array, "H W 3"], max_size: int | None) -> Float[Array, "h w 3"]:
     """Box-filter ``image`` by the smallest integer factor that makes its long side at most
-    ``max_size`` (cropping the remainder rows/columns); ``None`` keeps it as is."""
+    ``max_size`` (cropping the remainder rows/columns); ``None`` keeps it as is. A side
+    shorter than the factor is averaged whole (a 1-row panorama stays 1 row, not 0)."""
     if max_size is None:
         return image
     h, w = image.shape[-3], image.shape[-2]
+    _check.nonempty(image.shape, "image")
     f = -(-max(h, w) // int(max_size))
     if f <= 1:
         return image
-    hh, ww = h // f, w // f
+    fy, fx = min(f, h), min(f, w)
+    hh, ww = h // fy, w // fx
     batch = image.shape[:-3]
-    x = image[..., : hh * f, : ww * f, :]
+    x = image[..., : hh * fy, : ww * fx, :]
     # rows first (contiguous, vectorised adds), then columns of the f-times smaller result;
     # the barrier stops XLA fusing both into one strided reduction (~10x slower on CPU)
-    x = jnp.sum(x.reshape(*batch, hh, f, ww * f * 3), axis=-2)
+    x = jnp.sum(x.reshape(*batch, hh, fy, ww * fx * 3), axis=-2)
     x = jax.lax.optimization_barrier(x)
-    return jnp.sum(x.reshape(*batch, hh, ww, f, 3), axis=-2) / (f * f)
+    return jnp.sum(x.reshape(*batch, hh, ww, fx, 3), axis=-2) / (fy * fx)
 
 
 def _to_free(p: Array, bound: _Bound, log: bool) -> Array:

@@ -165,6 +165,11 @@ def test_downscale_is_a_box_filter():
     assert y.shape == (1, 3, 3)
     np.testing.assert_allclose(y[0, 0], np.asarray(x[:, :2]).mean(axis=(0, 1)))
     assert hf.downscale(x, None) is x
+    # a side shorter than the factor is averaged whole: a 1-row image keeps its row (it
+    # became (0, 3, 3), an empty image the fit then failed on; issue 16.4)
+    thin = hf.downscale(x[:1], 3)
+    assert thin.shape == (1, 3, 3)
+    np.testing.assert_allclose(thin[0, 1], np.asarray(x[0, 2:4]).mean(axis=0))
 
 
 def test_exact_reference_match_is_a_success_with_finite_sensitivity():
