@@ -102,6 +102,18 @@ def select_effects(
     return _ordered(effects)
 
 
+def _check_names(effects: "str | Iterable[str] | Mapping[str, bool]") -> None:
+    """Raise for an unknown effect name in any form of ``effects`` (the report not needed)."""
+    if isinstance(effects, str):
+        key = effects.strip().lower()
+        names: Iterable[str] = () if key in ("auto", "all", "none") else key.split(",")
+    else:
+        names = effects  # a mapping's keys, or the names
+    for name in names:
+        if str(name).strip():
+            effect_name(name)
+
+
 def _auto(report: SceneReport | None) -> tuple[str, ...]:
     if report is None:
         raise ValueError("effects='auto' needs the scene report (analyze the image first)")
@@ -444,6 +456,7 @@ def simulate(
     op = _operator(then)
     if not isinstance(effects, str | Mapping):
         effects = tuple(effects)  # read once (it may be an iterator)
+    _check_names(effects)  # before the analysis
     rv = as_view(view).resolve(rgb.shape[0], rgb.shape[1])
     weights = weights_of(ch)
     report = None
