@@ -50,6 +50,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from .._scale import inverse_pow2
 from .._stats import (
     DEFAULT_BINS,
     _from_counts,
@@ -185,12 +186,21 @@ def _clean_or_masked(x: Array, weights, fn):
 
 
 def _mapping(x: Array, L: Array, t: Array, L_max: Array) -> Array:
-    """Steps 1–4 of the module docstring on an image whose pixels are all finite."""
-    span = L_max - t
+    """Steps 1–4 of the module docstring on an image whose pixels are all finite.
+
+    Computed on the image times ``c``, a power of two that brings ``L_max`` into [0.5, 4):
+    exact, so ordinary images give the same bits, while the channel sum cannot overflow
+    near the float maximum and the ramp's gradient ``1 / span²`` neither overflows for dim
+    images nor underflows for bright ones."""
+    c = inverse_pow2(L_max)
+    span = (L_max - t) * c
     ok = span > 0
-    s = jnp.where(ok, jnp.clip((L - t) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
-    mean = ((x[..., 0] + x[..., 1] + x[..., 2]) / 3.0)[..., None]
-    return x - s[..., None] * (x - mean)
+    s = jnp.where(ok, jnp.clip((L * c - t * c) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
+    xc = x * c
+    mean = ((xc[..., 0] + xc[..., 1] + xc[..., 2]) / 3.0)[..., None]
+    # x itself unscaled: pixels below the threshold (s = 0) keep every bit, even those that
+    # scaling would take below the smallest normal float
+    return x - s[..., None] * ((xc - mean) / c)
 
 
 @jax.custom_jvp

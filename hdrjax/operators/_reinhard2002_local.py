@@ -23,6 +23,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
+from .._scale import inverse_pow2
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA
 from ._base import (
     AbstractOperator,
@@ -80,13 +81,23 @@ def gaussian_stack(L: Array, valid: Array, ss: list[float]) -> Array:
 
 
 def local_adaptation(
-    Ls: Array, valid: Array, key: Array, *, phi: float, epsilon: float, ss: list[float]
+    Ls: Array,
+    valid: Array,
+    key: Array,
+    *,
+    phi: float,
+    epsilon: float,
+    ss: list[float],
+    unit: Array | float = 1.0,
 ) -> Array:
     """``V1_m`` with the reference code's scale selection (scaled luminance in); the
-    operator is ``L_d = L / (1 + V1_m)``."""
+    operator is ``L_d = L / (1 + V1_m)``.
+
+    ``unit``: ``Ls`` is the scaled luminance times ``unit`` (a power of two that brings its
+    maximum near 1, so that the FFTs cannot overflow), and so is the result."""
     V1 = gaussian_stack(Ls, valid, ss)
     s2 = jnp.asarray(ss, Ls.dtype)[:-1, None, None] ** 2
-    act = (V1[:-1] - V1[1:]) / ((2.0**phi) * key / s2 + V1[:-1])
+    act = (V1[:-1] - V1[1:]) / ((2.0**phi) * key / s2 * unit + V1[:-1])
     over = jnp.abs(act) > epsilon
     m = jnp.where(jnp.any(over, axis=0), jnp.argmax(over, axis=0), len(ss) - 1)
     return jnp.maximum(jnp.take_along_axis(V1, m[None], axis=0)[0], 0.0)
@@ -139,17 +150,30 @@ class Reinhard2002Local(AbstractOperator):
         assert self.key is not None and self.log_average is not None
         scale = self.key / self.log_average
         valid = p.valid()
+        # the scaled luminance times a power of two c = c_s c_L that brings its maximum near
+        # 1: near the float maximum the FFTs' sums (or scale · L itself) would overflow;
+        # scaling by powers of two is exact, so ordinary images give the same bits
+        L = jnp.maximum(p.L, 0.0)
+        c_s = inverse_pow2(scale)
+        c_L = inverse_pow2(jnp.max(L))
+        _, e_s = jnp.frexp(c_s)
+        _, e_L = jnp.frexp(c_L)
+        top = jnp.finfo(L.dtype).maxexp - 2
+        unit = jnp.ldexp(jnp.ones((), L.dtype), jnp.clip(e_s + e_L - 2, -top, top))
         V1m = local_adaptation(
-            scale * jnp.maximum(p.L, 0.0),
+            (scale * c_s) * (L * c_L),
             valid,
             self.key,
             phi=self.phi,
             epsilon=self.epsilon,
             ss=scales(self.s_low, self.s_high, self.num),
+            unit=unit,
         )
-        # L_d / L_w = scale / (1 + V1_m): no division by the pixel's own luminance
-        ratio = jnp.where(p.L > 0, scale / (1.0 + V1m), 0.0)
-        return p.rgb * ratio[..., None]
+        # L_d / L_w = scale / (1 + V1_m) = (scale c_s) / (c + c V1_m) · c_L: no division by
+        # the pixel's own luminance, and c_L applied to RGB first (the ratio alone can fall
+        # below the smallest normal float when L_max is near the largest)
+        ratio = jnp.where(p.L > 0, (scale * c_s) / (unit + V1m), 0.0)
+        return (p.rgb * c_L) * ratio[..., None]
 
 
 @register("reinhard2002_auto")

@@ -1,0 +1,70 @@
+"""Finite in, finite out near the largest float (issue 16, point 3): values whose sums,
+FFTs or powers overflow float32 although the results are representable, and dim images whose
+gradients overflowed. 8×8 and 16×16 images; each function compiled once or twice."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import hdrjax
+import hdrjax.filters as hf
+
+from .conftest import RTOL32
+from .operators.cases import natural
+
+BIG = 3e38  # float32's maximum is 3.4e38
+MAX32 = float(np.finfo(np.float32).max)
+
+
+def _one_bright(shape=(16, 16), at=(5, 7)):
+    img = natural(shape)
+    img[at] = BIG
+    return img
+
+
+def test_mean_filter_of_values_near_the_float_maximum():
+    """A k×k sum of values near the maximum overflows; the mean does not (it was +Inf)."""
+    img = np.stack([np.full((8, 8, 3), 1e38), np.full((8, 8, 3), MAX32)]).astype(np.float32)
+    for k, rows in ((3, None), (7, 2)):  # the fused pass and the strip schedule
+        out = np.asarray(hf.mean_filter(img, k, strip_rows=rows))
+        np.testing.assert_allclose(out, img, rtol=RTOL32, err_msg=f"size {k}")
+
+
+def test_reinhard2002_local_with_one_pixel_near_the_float_maximum():
+    """The lamp's FFT sums overflowed and turned its neighbourhood NaN. Its display
+    luminance does not depend on how bright it is (it dominates its surround): the same
+    as for a lamp 2^28 times dimmer, where nothing overflows."""
+    img = _one_bright()
+    dim = img.copy()
+    dim[5, 7] = BIG * 2.0**-28
+    out = np.asarray(hdrjax.tonemap(np.stack([img, dim]), "reinhard2002_local"))
+    assert np.all(np.isfinite(out))
+    lamp = np.asarray(hdrjax.luminance(out[:, 5, 7]))
+    np.testing.assert_allclose(lamp[0], lamp[1], rtol=RTOL32)
+    auto = np.asarray(hdrjax.tonemap(img, "reinhard2002_auto"))  # > 11 zones: local
+    np.testing.assert_allclose(auto, out[0], rtol=RTOL32, atol=1e-7)
+
+
+def test_desaturate_highlights_near_the_float_maximum():
+    """The channel sum overflowed (NaN pixel); the brightest pixel becomes grey (its mean)."""
+    img = _one_bright()
+    img[5, 7] = (BIG, BIG / 2, BIG / 4)
+    out = np.asarray(hdrjax.desaturate_highlights(img))
+    assert np.all(np.isfinite(out))
+    mean = (BIG / 3) * (1 + 0.5 + 0.25)
+    np.testing.assert_allclose(out[5, 7], [mean] * 3, rtol=RTOL32)
+
+
+def test_desaturate_highlights_gradients_are_scale_invariant():
+    """``d(x) = d(kx) / k``: the gradient of a weighted sum is the same for an image and
+    the same image × 2^-120 (its 1 / span² overflowed: NaN gradients)."""
+    img = natural((8, 8))
+    w = jnp.linspace(1.0, 2.0, img.size).reshape(img.shape)
+
+    def loss(x, k):
+        return jnp.sum(w * hdrjax.desaturate_highlights(x * k)) / k
+
+    grad = jax.jit(jax.grad(loss))
+    g1 = np.asarray(grad(img, 1.0))
+    gk = np.asarray(grad(img, 2.0**-120))
+    np.testing.assert_allclose(gk, g1, rtol=RTOL32, atol=1e-6)
