@@ -1,12 +1,13 @@
 """``hdrjax desaturate INPUT -o OUTPUT.exr``: highlight desaturation (seed 000, section 4.2)."""
 
 import argparse
-import os
 
 from ._common import (
     HDR_EXT,
     DataError,
-    UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
     positive_float,
     read_image,
     refuse_overwriting_inputs,
@@ -22,7 +23,10 @@ def register(subparsers) -> None:
         "The automatic threshold is twice the luminance exceeded by 10%% of the pixels.",
     )
     p.add_argument("input", help="HDR image (RGB): .exr, .hdr or .pfm")
-    p.add_argument("-o", "--output", required=True, help="output: .exr, .hdr or .pfm")
+    p.add_argument(
+        "-o", "--output", required=True, help="output: .exr, .hdr or .pfm; '-': standard output"
+    )
+    add_format_argument(p, ("hdr", "pfm"))
     p.add_argument(
         "--threshold",
         type=positive_float,
@@ -40,8 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import io as hio
     from ..display import desaturate_highlights, highlight_threshold
 
-    if os.path.splitext(args.output)[1].lower() not in HDR_EXT:
-        raise UsageError(f"{args.output}: expected one of {', '.join(HDR_EXT)}")
+    output_ext(args, HDR_EXT)
     refuse_overwriting_inputs([args.output], [args.input])
     img = read_image(args.input)
     if img.kind != "rgb":
@@ -56,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
         t, note = args.threshold, "given"
     out = np.asarray(desaturate_highlights(rgb, t, weights=w))
     try:
-        hio.write(args.output, img.replace(image=out))
+        with output_file(args) as path:
+            hio.write(path, img.replace(image=out))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
     unit = f" {img.unit}" if img.unit else ""

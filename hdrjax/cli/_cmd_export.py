@@ -3,7 +3,14 @@
 import argparse
 import os
 
-from ._common import DataError, UsageError, refuse_overwriting_inputs
+from ._common import (
+    DataError,
+    UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
+    refuse_overwriting_inputs,
+)
 
 HDR_EXT = (".exr", ".hdr", ".pic", ".pfm")
 LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -32,7 +39,8 @@ def register(subparsers) -> None:
         "--overwrite is given.",
     )
     p.add_argument("input", help="HDR file: .exr, .hdr or .pfm")
-    p.add_argument("-o", "--output", required=True, help="output file")
+    p.add_argument("-o", "--output", required=True, help="output file; '-': standard output")
+    add_format_argument(p)
     p.add_argument("--part", help="EXR part to export (index or name)")
     p.add_argument("--layer", help="layer or view to export as the main image")
     p.add_argument(
@@ -63,12 +71,9 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import io as hio
 
-    ext = os.path.splitext(args.output)[1].lower()
-    if ext not in HDR_EXT + LDR_EXT:
-        raise UsageError(
-            f"{args.output}: unsupported output type {ext or '(none)'}; expected one of "
-            + ", ".join(HDR_EXT + LDR_EXT)
-        )
+    ext = output_ext(args, HDR_EXT + LDR_EXT)
+    if args.output == "-" and args.sidecars:
+        raise UsageError("--sidecars: files next to the output; not with -o - (standard output)")
     if args.bits == 16 and ext in (".jpg", ".jpeg"):
         raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
     if ext in LDR_EXT and (args.sidecars or args.pixel_type):
@@ -76,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     refuse_overwriting_inputs([args.output], [args.input])
-    if os.path.exists(args.output) and not args.overwrite:
+    if args.output != "-" and os.path.exists(args.output) and not args.overwrite:
         raise DataError(f"{args.output}: already exists (use --overwrite)")
     part = int(args.part) if args.part is not None and args.part.isdigit() else args.part
     try:
@@ -86,20 +91,22 @@ def run(args: argparse.Namespace) -> int:
 
             rgb = img.rgb() * np.float32(2.0**args.exposure)
             out = np.asarray(encode(rgb, "srgb"))
-            hio.write_display(
-                args.output, quantize(out, args.bits), bits=args.bits, overwrite=args.overwrite
-            )
+            with output_file(args) as path:
+                hio.write_display(
+                    path, quantize(out, args.bits), bits=args.bits, overwrite=args.overwrite
+                )
         else:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                hio.write(
-                    args.output,
-                    img,
-                    pixel_type=args.pixel_type,
-                    compression=args.compression,
-                    sidecars=True if args.sidecars else None,
-                    overwrite=args.overwrite,
-                )
+                with output_file(args) as path:
+                    hio.write(
+                        path,
+                        img,
+                        pixel_type=args.pixel_type,
+                        compression=args.compression,
+                        sidecars=True if args.sidecars else None,
+                        overwrite=args.overwrite,
+                    )
             for w in caught:
                 print(f"note: {w.message}")
     except (ValueError, OSError) as e:

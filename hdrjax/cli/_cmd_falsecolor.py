@@ -3,7 +3,16 @@
 import argparse
 import os
 
-from ._common import DataError, UsageError, read_image, refuse_overwriting_inputs, value_range
+from ._common import (
+    DataError,
+    UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
+    read_image,
+    refuse_overwriting_inputs,
+    value_range,
+)
 
 DISPLAY_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 FIGURE_EXT = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -40,7 +49,13 @@ def register(subparsers) -> None:
         "-Inf navy (change with --under/--over/--nan/--posinf/--neginf).",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr or .pfm")
-    p.add_argument("-o", "--output", required=True, help="output image: .png, .jpg or .tif")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output image: .png, .jpg or .tif; '-': standard output",
+    )
+    add_format_argument(p, ("png",))
     p.add_argument(
         "--layer",
         help="a grid layer to show (e.g. error, hits); default: the "
@@ -137,9 +152,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import io as hio
     from ..display import false_color
 
-    ext = os.path.splitext(args.output)[1].lower()
-    if ext not in DISPLAY_EXT:
-        raise UsageError(f"{args.output}: expected one of {', '.join(DISPLAY_EXT)}")
+    output_ext(args, DISPLAY_EXT)
     legend = args.legend
     if legend not in ("side", "none"):
         if os.path.splitext(legend)[1].lower() not in FIGURE_EXT:
@@ -185,7 +198,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(e)) from None
     out = fc.composite() if legend == "side" else np.asarray(fc.image)
     try:
-        hio.write_display(args.output, out)
+        with output_file(args) as path:
+            hio.write_display(path, out)
         if legend not in ("side", "none"):
             fc.legend.savefig(legend)
     except (ValueError, OSError) as e:

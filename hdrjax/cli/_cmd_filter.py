@@ -1,9 +1,17 @@
 """``hdrjax filter INPUT -o OUTPUT --median 5``: mean or median filter an HDR image."""
 
 import argparse
-import os
 
-from ._common import HDR_EXT, DataError, UsageError, read_image, refuse_overwriting_inputs
+from ._common import (
+    HDR_EXT,
+    DataError,
+    UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
+    read_image,
+    refuse_overwriting_inputs,
+)
 
 
 def _odd(text: str) -> int:
@@ -25,7 +33,10 @@ def register(subparsers) -> None:
         "mixed) unless --criterion says channels or vector. Layers are kept.",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr or .pfm")
-    p.add_argument("-o", "--output", required=True, help="output: .exr, .hdr or .pfm")
+    p.add_argument(
+        "-o", "--output", required=True, help="output: .exr, .hdr or .pfm; '-': standard output"
+    )
+    add_format_argument(p, ("hdr", "pfm"))
     kind = p.add_mutually_exclusive_group(required=True)
     kind.add_argument("--median", type=_odd, metavar="K", help="median filter, K×K window")
     kind.add_argument("--mean", type=_odd, metavar="K", help="mean (box) filter, K×K window")
@@ -55,8 +66,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import io as hio
     from ..filters import mean_filter, median_filter
 
-    if os.path.splitext(args.output)[1].lower() not in HDR_EXT:
-        raise UsageError(f"{args.output}: expected one of {', '.join(HDR_EXT)}")
+    output_ext(args, HDR_EXT)
     refuse_overwriting_inputs([args.output], [args.input])
     if args.passes < 1:
         raise UsageError(f"--passes: expected an integer >= 1, got {args.passes}")
@@ -81,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     out = np.asarray(jax.block_until_ready(out))
     dt = time.perf_counter() - t0
     try:
-        hio.write(args.output, img.replace(image=out))
+        with output_file(args) as path:
+            hio.write(path, img.replace(image=out))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
     h, w = x.shape[:2]

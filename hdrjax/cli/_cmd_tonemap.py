@@ -9,6 +9,9 @@ from ._common import (
     LDR_EXT,
     DataError,
     UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
     positive_float,
     read_image,
     refuse_overwriting_inputs,
@@ -90,12 +93,7 @@ def add_output_argument(p: argparse.ArgumentParser) -> None:
         help="output: .png (8/16-bit), .jpg, .tif (encoded) or .exr/.hdr/.pfm "
         "(display-referred linear); '-' writes to standard output (needs --format)",
     )
-    p.add_argument(
-        "--format",
-        choices=STDOUT_FORMATS,
-        help="the format written to standard output with -o - (status text then goes to "
-        "standard error)",
-    )
+    add_format_argument(p)
 
 
 def add_table_and_scale_arguments(p: argparse.ArgumentParser) -> None:
@@ -122,29 +120,9 @@ def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
 
 
-STDOUT_FORMATS = ("png", "hdr", "pfm")
-"""Formats ``-o -`` writes to standard output (those that need no seeking)."""
-
-
-def output_ext(args: argparse.Namespace) -> str:
-    """The extension of ``args.output``; for ``-`` (standard output) the ``--format``'s."""
-    if args.output == "-":
-        return "." + args.format if getattr(args, "format", None) else ""
-    return os.path.splitext(args.output)[1].lower()
-
-
 def check_output(args: argparse.Namespace) -> str:
     """Validate ``args.output`` against the encoding options; returns its extension."""
-    ext = output_ext(args)
-    if args.output == "-" and not ext:
-        raise UsageError(f"-o -: give --format ({', '.join(STDOUT_FORMATS)}) for standard output")
-    if args.output != "-" and getattr(args, "format", None):
-        raise UsageError("--format applies to -o - (standard output) only")
-    if ext not in LDR_EXT + HDR_EXT:
-        raise UsageError(
-            f"{args.output}: unsupported output type {ext or '(none)'};"
-            f" expected one of {', '.join(LDR_EXT + HDR_EXT)}"
-        )
+    ext = output_ext(args, LDR_EXT + HDR_EXT)
     if args.bits == 16 and ext in (".jpg", ".jpeg"):
         raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
     refuse_overwriting_inputs([args.output], [args.input, args.table])
@@ -172,45 +150,14 @@ def write_output(args: argparse.Namespace, encoded) -> None:
     from .. import io as hio
     from ..display import quantize
 
-    if args.output == "-":
-        _write_stdout(args, encoded)
-        return
     try:
-        if output_ext(args) in LDR_EXT:
-            hio.write_display(args.output, quantize(encoded, args.bits), bits=args.bits)
-        else:
-            hio.write(args.output, encoded.astype(np.float32))
+        with output_file(args) as path:
+            if output_ext(args) in LDR_EXT:
+                hio.write_display(path, quantize(encoded, args.bits), bits=args.bits)
+            else:
+                hio.write(path, encoded.astype(np.float32))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
-
-
-def _write_stdout(args: argparse.Namespace, encoded) -> None:
-    """The whole file encoded in memory first, then written at once: an error leaves
-    standard output empty rather than holding half an image."""
-    import sys
-
-    import numpy as np
-
-    from ..display import quantize
-    from ..io import _display, _pfm, _rgbe
-
-    try:
-        if args.format == "png":
-            data = _display.encode_png(
-                _display.to_code_values(quantize(encoded, args.bits), args.bits)
-            )
-        elif args.format == "hdr":
-            data = _rgbe.encode_rgbe(np.asarray(encoded, np.float32))
-        else:
-            data = _pfm.encode_pfm(np.asarray(encoded, np.float32))
-    except ValueError as e:
-        raise DataError(f"-o -: cannot encode {args.format.upper()}: {e}") from None
-    out = getattr(args, "stdout", None) or sys.stdout.buffer
-    try:
-        out.write(data)
-        out.flush()
-    except OSError as e:  # a closed pipe (e.g. `| head -c 10`)
-        raise DataError(f"-o -: cannot write to standard output ({e.strerror or e})") from None
 
 
 def build_operator(args: argparse.Namespace):

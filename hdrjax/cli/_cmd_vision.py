@@ -2,7 +2,6 @@
 
 import argparse
 import json
-import os
 import time
 
 from ._common import (
@@ -10,6 +9,9 @@ from ._common import (
     LDR_EXT,
     DataError,
     UsageError,
+    add_format_argument,
+    output_ext,
+    output_file,
     positive_float,
     read_image,
     refuse_overwriting_inputs,
@@ -31,8 +33,9 @@ def register(subparsers) -> None:
         "-o",
         "--output",
         help="write the simulated image: .exr/.hdr/.pfm (linear cd/m²) or "
-        ".png/.jpg/.tif (tone-mapped, sRGB)",
+        ".png/.jpg/.tif (tone-mapped, sRGB); '-': standard output",
     )
+    add_format_argument(p)
     fov = p.add_mutually_exclusive_group()
     fov.add_argument(
         "--fov",
@@ -145,12 +148,7 @@ def vision_effects() -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    ext = os.path.splitext(args.output)[1].lower() if args.output else None
-    if ext is not None and ext not in LDR_EXT + HDR_EXT:
-        raise UsageError(
-            f"{args.output}: unsupported output type {ext or '(none)'}; "
-            f"expected one of {', '.join(LDR_EXT + HDR_EXT)}"
-        )
+    ext = output_ext(args, LDR_EXT + HDR_EXT) if args.output else None
     if args.perceptual and ext not in LDR_EXT:
         raise UsageError("--perceptual needs a .png/.jpg/.tif output")
     refuse_overwriting_inputs([args.output], [args.input])
@@ -219,10 +217,11 @@ def run(args: argparse.Namespace) -> int:
     from .. import io as hio
 
     try:
-        if ext in LDR_EXT:
-            hio.write_display(args.output, display.quantize(disp))
-        else:
-            hio.write(args.output, np.asarray(out, np.float32))
+        with output_file(args) as path:
+            if ext in LDR_EXT:
+                hio.write_display(path, display.quantize(disp))
+            else:
+                hio.write(path, np.asarray(out, np.float32))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
     if not args.json:

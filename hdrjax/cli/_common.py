@@ -1,12 +1,19 @@
 """Shared pieces of the command line: error types and argument parsers."""
 
 import argparse
+import contextlib
 import os
+import sys
+import tempfile
+from collections.abc import Iterator
 
 LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 """Display-referred outputs (encoded, 8/16-bit)."""
 HDR_EXT = (".exr", ".hdr", ".pfm")
 """Scene- or display-referred linear float files."""
+STDOUT_FORMATS = ("png", "hdr", "pfm")
+"""Formats ``-o -`` writes to standard output: those written front to back (EXR needs to
+seek), as pfstools' ``pfsout*`` write to a pipe."""
 
 
 class CLIError(Exception):
@@ -80,3 +87,57 @@ def read_image(path: str):
     except (ValueError, OSError) as e:
         msg = str(e)
         raise DataError(msg if os.path.basename(path) in msg else f"{path}: {msg}") from None
+
+
+def add_format_argument(p: argparse.ArgumentParser, formats: tuple[str, ...] = STDOUT_FORMATS):
+    """``--format``: the format of ``-o -`` (standard output)."""
+    p.add_argument(
+        "--format",
+        choices=formats,
+        help="the format written to standard output with -o - (status text then goes to "
+        "standard error)",
+    )
+
+
+def output_ext(args: argparse.Namespace, allowed: tuple[str, ...] | None = None) -> str:
+    """The extension of ``args.output`` (lower case); for ``-`` (standard output) that of
+    ``--format``, which ``-o -`` needs and a file output refuses (UsageError). ``allowed``:
+    the extensions the command writes (UsageError naming them otherwise)."""
+    fmt = getattr(args, "format", None)
+    if args.output == "-":
+        if not fmt:
+            formats = [f for f in STDOUT_FORMATS if allowed is None or "." + f in allowed]
+            raise UsageError(f"-o -: give --format ({', '.join(formats)}) for standard output")
+        ext = "." + fmt
+    else:
+        if fmt:
+            raise UsageError("--format applies to -o - (standard output) only")
+        ext = os.path.splitext(args.output)[1].lower()
+    if allowed is not None and ext not in allowed:
+        raise UsageError(
+            f"{args.output}: unsupported output type {ext or '(none)'}; "
+            f"expected one of {', '.join(allowed)}"
+        )
+    return ext
+
+
+@contextlib.contextmanager
+def output_file(args: argparse.Namespace) -> Iterator[str]:
+    """The path a command writes its output to: ``args.output``, or for ``-o -`` a
+    temporary file of the ``--format``'s type whose bytes go to standard output once the
+    block has finished without error (so an error leaves standard output empty, never half
+    an image)."""
+    if args.output != "-":
+        yield args.output
+        return
+    with tempfile.TemporaryDirectory(prefix="hdrjax-stdout-") as d:
+        path = os.path.join(d, "stdout" + output_ext(args))
+        yield path
+        with open(path, "rb") as f:
+            data = f.read()
+    out = getattr(args, "stdout", None) or sys.stdout.buffer
+    try:
+        out.write(data)
+        out.flush()
+    except OSError as e:  # a closed pipe (e.g. `| head -c 10`)
+        raise DataError(f"-o -: cannot write to standard output ({e.strerror or e})") from None
