@@ -68,3 +68,22 @@ def test_desaturate_highlights_gradients_are_scale_invariant():
     g1 = np.asarray(grad(img, 1.0))
     gk = np.asarray(grad(img, 2.0**-120))
     np.testing.assert_allclose(gk, g1, rtol=RTOL32, atol=1e-6)
+
+
+def test_tumblin_power_saturates_below_the_float_maximum():
+    """With ``L_wa > L_da`` the exponent γ_w/γ_d exceeds 1 and ``T(L)`` left the float range
+    for a 3e38 lamp (+Inf in tumblin1999, NaN in tumblin_reinhard); it saturates: finite,
+    still the brightest pixel, and every other pixel exactly as before."""
+    img = natural((8, 8)) * np.float32(1e3)
+    lamp = img.copy()
+    lamp[5, 7] = BIG
+    batch = np.stack([img, lamp])
+    out = np.asarray(hdrjax.tonemap(batch, "tumblin1999", L_wa=1e3))
+    assert np.all(np.isfinite(out))
+    np.testing.assert_array_equal(
+        np.delete(out[1].reshape(64, 3), 5 * 8 + 7, 0),
+        np.delete(out[0].reshape(64, 3), 5 * 8 + 7, 0),
+    )
+    L = np.asarray(hdrjax.luminance(out[1]))
+    assert L[5, 7] == L.max() and L[5, 7] > 1e30
+    assert np.all(np.isfinite(np.asarray(hdrjax.tonemap(lamp, "tumblin_reinhard"))))

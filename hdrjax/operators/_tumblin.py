@@ -58,7 +58,11 @@ def tumblin_curve(
     m = jnp.power(C_max, (g_wd - 1.0) / 2.0)
     ratio = jnp.maximum(L_w, 0.0) / L_wa
     pos = ratio > 0
-    powed = jnp.where(pos, jnp.exp((g_w / g_d) * safe_log(ratio)), 0.0)
+    # the exponent γ_w / γ_d exceeds 1 when L_wa > L_da: near the float maximum the power
+    # leaves the float range; it saturates 1 % below the maximum (finite, and a no-op for
+    # every representable result)
+    big = jnp.log(jnp.finfo(ratio.dtype).max) - 0.01 - jnp.log(m * L_da)
+    powed = jnp.where(pos, jnp.exp(jnp.minimum((g_w / g_d) * safe_log(ratio), big)), 0.0)
     return m * L_da * powed
 
 
