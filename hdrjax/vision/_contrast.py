@@ -112,7 +112,9 @@ def _contrast(
 ) -> Array:
     m = contrast_scale(adaptation, model=model, display_max=dmax, display_range=drange)
     x, ok = sanitize(rgb)  # a NaN pixel times m would give m a NaN gradient
-    return restore(x * m.astype(rgb.dtype), rgb, ok)
+    # m > 1 (dim adaptation) takes values near the float maximum past it: they saturate
+    big = float(jnp.finfo(rgb.dtype).max)
+    return restore(jnp.clip(x * m.astype(rgb.dtype), -big, big), rgb, ok)
 
 
 __all__ = [

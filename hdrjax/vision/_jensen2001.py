@@ -28,6 +28,7 @@ from ._photometry import (
     _as_float,
     _chroma_key,
     check_rgb,
+    headroom,
     largest_component_reciprocal,
     restore,
     rgb_to_xyz,
@@ -72,9 +73,13 @@ def blue_shift(
 @functools.partial(jax.jit, static_argnums=1)
 def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     x_, ok = sanitize(rgb)
+    # linear in the pixel but for s: computed on the pixel × c (exact, 1 below 2^64 cd/m²),
+    # whose XYZ cannot overflow (Z of a white is 1.09 RGB; the inverse matrix reaches 3.2)
+    c = headroom(x_)
+    x_ = x_ * c
     X, Y, Z = rgb_to_xyz(x_, chromaticities)
     V = scotopic_luminance(x_, chromaticities=chromaticities)
-    s = blue_shift_weight(Y)
+    s = blue_shift_weight(Y / c[..., 0])
     # chromaticity from X, Y, Z over the pixel's largest |X|, |Y|, |Z| (constant under
     # differentiation): d(X/tot)/d tot = -X/tot² would over/underflow tot² at 1e±20 cd/m²
     r = largest_component_reciprocal(X, Y, Z)
@@ -92,7 +97,7 @@ def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     Xn = jnp.where(good, cx * Yn / cys, X)
     Zn = jnp.where(good, (1.0 - cx - cy) * Yn / cys, Z)
     Yn = jnp.where(good, Yn, Y)
-    return restore(xyz_to_rgb(Xn, Yn, Zn, chromaticities), rgb, ok)
+    return restore(xyz_to_rgb(Xn, Yn, Zn, chromaticities) / c, rgb, ok)
 
 
 __all__ = ["BLUE_WHITE", "ROD_SCALE", "blue_shift", "blue_shift_weight"]

@@ -29,6 +29,7 @@ from ._photometry import (
     _as_float,
     _chroma_key,
     check_rgb,
+    headroom,
     restore,
     sanitize,
     scotopic_luminance,
@@ -170,12 +171,15 @@ def _veil(rgb: Array, view: ResolvedView) -> Array:
     spec = jnp.asarray(_fft.kernel_spectrum(k, size)).astype(
         jnp.result_type(x.dtype, jnp.complex64)
     )
-    num = _fft.convolve(fov * have, spec, size)
+    # the weighted sum num overflows near the float maximum although num / den does not:
+    # it runs on fov × c (exact power of two, 1 below 2^64 cd/m²) and c is divided out
+    c = headroom(fov, None)
+    num = _fft.convolve(fov * (have * c), spec, size)
     den = _fft.convolve(have, spec, size)
     # den is a sum of positive weights or (no other sample: a 1-sample grid) FFT round-off;
     # without a surround the sample keeps its own light (pcond would divide by zero).
     okd = den > 1e-6 * float(k.max(initial=0.0))
-    v = jnp.where(okd, VADAPT * num / jnp.where(okd, den, 1.0), VADAPT * fov)
+    v = jnp.where(okd, VADAPT * num / jnp.where(okd, den, 1.0) / c, VADAPT * fov)
     v = jnp.where(jnp.min(fov) >= 0, jnp.maximum(v, 0.0), v)  # FFT round-off below 0
     full = upsample(v, (by, bx), rgb.shape[:2])
     return restore((1.0 - VADAPT) * x + full, rgb, ok)

@@ -19,6 +19,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_CHROMATICITIES, luminance, luminance_weights
+from .._scale import inverse_pow2
 
 LMIN = 1e-7
 """Smallest visible world luminance, cd/m² (pcond.h ``LMIN``)."""
@@ -181,6 +182,22 @@ def scotopic_luminance(
     return jnp.where(ok, jnp.maximum(V, 0.0), 0.0)
 
 
+def headroom(x: Array, axis: int | None = -1) -> Array:
+    """Exact power-of-two factor ``c ≤ 1`` that brings ``max |x|`` (per pixel along ``axis``,
+    or over all of ``x`` for ``None``) down to at most ``2^(maxexp/2)`` (2^64 in float32).
+
+    Colour matrices (``Z`` of a white reaches 1.09·RGB), FFT sums and the like overflow near
+    the float maximum although their normalised results are representable: computing on
+    ``x · c`` and dividing ``c`` out of the result is exact (only exponents change), and
+    ``c = 1`` for all values below 2^64, so ordinary images give the same bits. A constant
+    for ``jax.grad``; non-finite values give 1.
+    """
+    top = 2.0 ** (jnp.finfo(x.dtype).maxexp // 2)
+    m = jax.lax.stop_gradient(jnp.max(jnp.abs(x), axis=axis, keepdims=axis is not None))
+    big = jnp.isfinite(m) & (m > top)
+    return jnp.where(big, inverse_pow2(m) * top, 1.0).astype(x.dtype)
+
+
 def finite_pixels(rgb: Array) -> Array:
     """Boolean ``(..., )`` mask of pixels whose three channels are all finite."""
     return jnp.all(jnp.isfinite(rgb), axis=-1)
@@ -210,6 +227,7 @@ __all__ = [
     "TOP_MESOPIC",
     "check_rgb",
     "finite_pixels",
+    "headroom",
     "largest_component_reciprocal",
     "restore",
     "rgb_to_xyz",
