@@ -26,4 +26,47 @@ def inverse_pow2(x: Array) -> Array:
     return jnp.ldexp(jnp.ones((), x.dtype), -jnp.clip(e, -top, top))
 
 
-__all__ = ["inverse_pow2"]
+@jax.custom_jvp
+def quotient(x: Array, d: Array) -> Array:
+    """``x / d`` with the derivative ``(ẋ − (x / d) ḋ) / d``. JAX's own has ``x / d²``,
+    which overflows or underflows (``d`` beyond ``2^64`` or below ``2^-64`` in float32)
+    where the quotient and its derivative are representable: NaN gradients for very bright
+    and very dim images."""
+    return x / d
+
+
+@quotient.defjvp
+def _quotient_jvp(primals, tangents):
+    (x, d), (tx, td) = primals, tangents
+    r = x / d
+    return r, (tx - r * td) / d
+
+
+@jax.custom_jvp
+def scale(x: Array, a: Array, d: Array) -> Array:
+    """``(a / d) · x`` (one multiplication per element, as written) with a derivative that
+    never forms ``x / d²`` or ``Σ ẋ x`` (both overflow for ``x`` near the float maximum):
+    ``(a / d) ẋ + ȧ (x / d) − ḋ (a / d) x / d``."""
+    return (a / d) * x
+
+
+@scale.defjvp
+def _scale_jvp(primals, tangents):
+    (x, a, d), (tx, ta, td) = primals, tangents
+    s = a / d
+    out = s * x
+    return out, s * tx + ta * quotient(x, d) - td * quotient(out, d)
+
+
+def divide(x: Array, d: Array) -> Array:
+    """``x / d`` for an array ``x`` and a scalar ``d > 0`` up to the largest float.
+
+    XLA computes a division by a scalar as ``x · (1/d)``, and ``1/d`` is subnormal (flushed
+    to 0 on CPU) once ``d > 1/tiny`` (8.5e37 in float32), which turned every pixel black;
+    both are divided by 8 first (exact), which keeps ``1/d`` normal for every finite ``d``.
+    """
+    c = jnp.where(d > 1, 0.125, 1.0).astype(d.dtype)
+    return quotient(x * c, d * c)
+
+
+__all__ = ["divide", "inverse_pow2", "quotient", "scale"]

@@ -651,6 +651,19 @@ def _trimmed_log_mean_jvp(primals, tangents):
     return _trimmed_log_mean(L, p99, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
 
 
+def _ln_max(dtype) -> float:
+    """The largest ``x`` of ``dtype`` whose ``exp`` is finite (``ln(max)`` rounded up would
+    give +Inf)."""
+    x = np.log(np.finfo(dtype).max).astype(dtype)
+    with np.errstate(over="ignore"):
+        while not np.isfinite(np.exp(x)):
+            x = np.nextafter(x, np.zeros((), dtype))
+    # XLA's exp may round differently from NumPy's: a few ulps of margin
+    for _ in range(4):
+        x = np.nextafter(x, np.zeros((), dtype))
+    return float(x)
+
+
 def measure(
     L: Float[ArrayLike, "H W"],
     *,
@@ -710,14 +723,17 @@ def measure_checked(
     lmin = jnp.where(any_finite, lmin, 0.0)
     lmax = jnp.where(any_finite, lmax, 0.0)
     minpos = jnp.where(any_pos, minpos, 1.0)
-    log_avg = jnp.exp(log_sum / jnp.maximum(n_fin, 1).astype(dt))
+    # a mean of logarithms is at most ln(max); exp of its rounding may exceed the largest
+    # float (an image at float32's maximum): clamp, so the log-averages stay finite
+    ln_max = _ln_max(dt)
+    log_avg = jnp.exp(jnp.minimum(log_sum / jnp.maximum(n_fin, 1).astype(dt), ln_max))
     qs = jnp.array([0.01, 0.99], dt)
     if m is None:
         (p01, p99), err = percentile(L, 100 * qs, method="exact")
         p01 = jnp.where(any_pos, p01, 1.0)
         p99 = jnp.where(any_pos, p99, 1.0)
         n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
-        trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1).astype(dt))
+        trimmed = jnp.exp(jnp.minimum(kept_sum / jnp.maximum(n_kept, 1).astype(dt), ln_max))
         trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
     else:
         mx = jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)
@@ -728,7 +744,8 @@ def measure_checked(
         p99 = jnp.where(any_pos, p99, 1.0)
         err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
         mean_ln = kept_sum / jnp.maximum(n_kept, 1e-30)
-        trimmed = jnp.exp(_trimmed_log_mean(L, jax.lax.stop_gradient(p99), mean_ln))
+        trimmed = _trimmed_log_mean(L, jax.lax.stop_gradient(p99), mean_ln)
+        trimmed = jnp.exp(jnp.minimum(trimmed, ln_max))
         trimmed = jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
     return finite, LuminanceStats(
         n_pixels=n_pix,

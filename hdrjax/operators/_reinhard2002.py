@@ -39,6 +39,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array
 
+from .._scale import scale
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
 from ._base import (
     AbstractLuminanceCurve,
@@ -75,7 +76,9 @@ def jgt_white_terms(st: LuminanceStats, scale: Array) -> tuple[Array, dict[str, 
     # product); a boolean, so no gradient flows through it
     log2_avg_scaled = jnp.log2(scale) + jnp.log2(st.log_average_trimmed)
     guard = zones <= log2_avg_scaled + 4.415037
-    white = jnp.where(guard, 1.5 * L_max * scale, eq5)
+    # L_max · scale first: 1.5 · L_max overflows for L_max near the float maximum, and
+    # its product with the zero cotangent of the branch not taken is NaN
+    white = jnp.where(guard, 1.5 * (L_max * scale), eq5)
     white = jnp.where(any_pos, jnp.maximum(white, jnp.finfo(white.dtype).tiny), 1.0)
     return white, {"zones": zones, "guard": guard}
 
@@ -143,7 +146,7 @@ class Reinhard2002(AbstractLuminanceCurve):
     def _curve(self, L: Array) -> Array:
         assert self.key is not None and self.L_white is not None
         assert self.log_average is not None
-        return reinhard_curve((self.key / self.log_average) * L, self.L_white)
+        return reinhard_curve(scale(L, self.key, self.log_average), self.L_white)
 
 
 __all__ = [
