@@ -29,6 +29,7 @@ from ._base import (
     min_luminance,
     param,
     register,
+    scale_by_luminance,
     weights_field,
 )
 
@@ -45,6 +46,23 @@ def _set(op, **values):
         tuple(values[n] for n in names),
         is_leaf=lambda x: x is None,
     )
+
+
+def _log1p_product(a: Array, x: Array) -> Array:
+    """``ln(1 + a x)`` for ``a ≥ 1``, ``x ≥ 0``, without overflow when ``a x`` exceeds the
+    float range: ``ln x + ln(a + 1/x)`` for ``x ≥ 1`` (gradient-safe on both sides)."""
+    big = x >= 1
+    xs = jnp.where(big, 1.0, x)
+    xb = jnp.where(big, x, 1.0)
+    return jnp.where(big, jnp.log(xb) + jnp.log(a + 1 / xb), jnp.log1p(a * xs))
+
+
+def _divide(x: Array, d: Array) -> Array:
+    """``x / d`` for an image ``x`` and a scalar ``d > 0`` up to the largest float: XLA
+    computes a division by a scalar as ``x · (1/d)``, and ``1/d`` is subnormal (flushed to
+    0 on CPU) once ``d > 1/tiny`` (8.5e37 in float32); both are divided by 8 first (exact)."""
+    c = jnp.where(d > 1, 0.125, 1.0).astype(d.dtype)
+    return (x * c) / (d * c)
 
 
 class _MaxNormalised(AbstractLuminanceCurve):
@@ -97,7 +115,10 @@ class Gamma(AbstractOperator):
 
 @register("logarithmic")
 class Logarithmic(_MaxNormalised):
-    """``log10(1 + q L) / log10(1 + k L_max)``, q, k ≥ 1 (colour-hdri ``..._logarithmic``)."""
+    """``log10(1 + q L) / log10(1 + k L_max)``, q, k ≥ 1 (colour-hdri ``..._logarithmic``).
+
+    Computed as ``ln(1 + q L) / ln(1 + k L_max)`` with ``log1p``: finite for images at any
+    scale of the float type (``1 + k L_max`` rounds to 1 in a dim image)."""
 
     q: Array = eqx.field(default=1.0, converter=param)
     k: Array = eqx.field(default=1.0, converter=param)
@@ -106,7 +127,11 @@ class Logarithmic(_MaxNormalised):
 
     def _curve(self, L: Array) -> Array:
         q, k = jnp.maximum(self.q, 1.0), jnp.maximum(self.k, 1.0)
-        return jnp.log10(1 + L * q) / jnp.log10(1 + self.L_max * k)
+        # the base cancels: ln(1 + qL) / ln(1 + k L_max); ``log1p`` keeps a dim image's
+        # L_max (1 + k L_max == 1 below 6e-8 in float32: 0/0). A product with the
+        # reciprocal, not a quotient: were the result divided by L again, XLA would
+        # rewrite (a / b) / L as a / (b L), which underflows to 0 in a dim image (Inf)
+        return _log1p_product(q, L) * (1.0 / _log1p_product(k, self.L_max))
 
 
 @register("exponential")
@@ -162,14 +187,32 @@ class ExponentiationMapping(_MaxNormalised):
 
 @register("schlick1994")
 class Schlick1994(_MaxNormalised):
-    """``p L / (p L − L + L_max)`` (Schlick 1994; colour-hdri ``..._Schlick1994``)."""
+    """``p L / (p L − L + L_max)`` (Schlick 1994; colour-hdri ``..._Schlick1994``).
+
+    The curve depends on ``x = L / L_max`` alone (``p x / ((p − 1) x + 1)``), so it is
+    evaluated on the image divided by ``L_max``: the same values as colour-hdri's, and
+    finite for images at any scale of the float type. (Evaluated on ``L`` itself, the
+    luminance floor that keeps gradients finite is absolute: below it, an image dimmer
+    than 1e-19 in float32 got a wrong ratio for ``p ≠ 1``, and the ratio ``≈ 1 / L_max``
+    overflowed to Inf in dim images and was flushed to 0 in bright ones.)
+    """
 
     p: Array = eqx.field(default=1.0, converter=param)
     L_max: Array | None = eqx.field(default=None, converter=param)
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
-        return (self.p * L) / (self.p * L - L + self.L_max)
+        return self._relative_curve(L / self.L_max)
+
+    def _relative_curve(self, x: Array) -> Array:
+        return (self.p * x) / ((self.p - 1) * x + 1)
+
+    def _apply(self, p: Prepared) -> Array:
+        # the one curve overriding the shared mapping: its floor must be relative to L_max
+        # (see the class docstring); the rest of the mapping is the same
+        return scale_by_luminance(
+            _divide(p.rgb, self.L_max), _divide(p.L, self.L_max), self._relative_curve
+        )
 
 
 @register("reinhard2004")
