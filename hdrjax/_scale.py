@@ -7,10 +7,25 @@ changes), so the scaled computation returns the same bits as the unscaled one wh
 latter does not overflow or reach subnormal numbers.
 """
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
+
+
+def ln_max(dtype) -> float:
+    """The largest ``x`` of ``dtype`` whose ``exp`` is finite, with a few ulps of margin
+    (``ln(max)`` rounded up gives +Inf; XLA's ``exp`` may round differently from NumPy's):
+    clamp a mean of logarithms to it before ``exp``."""
+    x = np.log(np.finfo(dtype).max).astype(dtype)
+    with np.errstate(over="ignore"):
+        while not np.isfinite(np.exp(x)):
+            x = np.nextafter(x, np.zeros((), dtype))
+    for _ in range(4):
+        x = np.nextafter(x, np.zeros((), dtype))
+    return float(x)
 
 
 def inverse_pow2(x: Array) -> Array:
@@ -69,4 +84,29 @@ def divide(x: Array, d: Array) -> Array:
     return quotient(x * c, d * c)
 
 
-__all__ = ["divide", "inverse_pow2", "quotient", "scale"]
+def at_scale(f, x: Array, c: Array) -> Array:
+    """``f(x · c, c) / c`` for an exact power-of-two ``c`` (e.g. from ``headroom``), with
+    the derivative ``∂f/∂x(x · c, c) ẋ`` (``c`` is a constant; ``f`` may read it, e.g. to
+    evaluate a term on the unscaled values).
+
+    That is the chain rule's value, but autodiff of the written form passes the cotangent
+    ``1/c`` (up to ``2^64`` in float32) through ``f`` at values up to ``2^64``: the products
+    overflow in the backward pass (NaN image gradients) although the gradient is
+    representable. ``c = 1`` gives the unscaled values (multiplications by 1 are exact).
+    """
+    return _at_scale(f, x, jax.lax.stop_gradient(c))
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _at_scale(f, x, c):
+    return f(x * c, c) / c
+
+
+@_at_scale.defjvp
+def _at_scale_jvp(f, primals, tangents):
+    (x, c), (tx, _) = primals, tangents
+    out, t = jax.jvp(lambda z: f(z, c), (x * c,), (tx,))
+    return out / c, t
+
+
+__all__ = ["at_scale", "divide", "inverse_pow2", "quotient", "scale"]

@@ -70,6 +70,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from . import _check
+from ._scale import ln_max as ln_max_of
 
 DEFAULT_BINS = 8192
 DEFAULT_DELTA = 1e-6
@@ -651,19 +652,6 @@ def _trimmed_log_mean_jvp(primals, tangents):
     return _trimmed_log_mean(L, p99, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
 
 
-def _ln_max(dtype) -> float:
-    """The largest ``x`` of ``dtype`` whose ``exp`` is finite (``ln(max)`` rounded up would
-    give +Inf)."""
-    x = np.log(np.finfo(dtype).max).astype(dtype)
-    with np.errstate(over="ignore"):
-        while not np.isfinite(np.exp(x)):
-            x = np.nextafter(x, np.zeros((), dtype))
-    # XLA's exp may round differently from NumPy's: a few ulps of margin
-    for _ in range(4):
-        x = np.nextafter(x, np.zeros((), dtype))
-    return float(x)
-
-
 def measure(
     L: Float[ArrayLike, "H W"],
     *,
@@ -725,7 +713,7 @@ def measure_checked(
     minpos = jnp.where(any_pos, minpos, 1.0)
     # a mean of logarithms is at most ln(max); exp of its rounding may exceed the largest
     # float (an image at float32's maximum): clamp, so the log-averages stay finite
-    ln_max = _ln_max(dt)
+    ln_max = ln_max_of(dt)
     log_avg = jnp.exp(jnp.minimum(log_sum / jnp.maximum(n_fin, 1).astype(dt), ln_max))
     qs = jnp.array([0.01, 0.99], dt)
     if m is None:

@@ -28,7 +28,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
-from .._scale import quotient
+from .._scale import ln_max, quotient
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, measure, measure_checked
 
 _Op = TypeVar("_Op", bound="AbstractOperator")
@@ -444,7 +444,8 @@ def log_average(p: Prepared, eps: float) -> Array:
     terms = jnp.log(jnp.maximum(p.L, 0.0) + eps)
     if not p.clean:
         terms = jnp.where(p.valid(), terms, 0.0)
-    return jnp.exp(jnp.sum(terms) / count_valid(p))
+    # a mean of logarithms is at most ln(max), but exp of its rounding may overflow
+    return jnp.exp(jnp.minimum(jnp.sum(terms) / count_valid(p), ln_max(p.L.dtype)))
 
 
 class AbstractLuminanceCurve(AbstractOperator):

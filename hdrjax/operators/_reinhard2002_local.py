@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
-from .._scale import inverse_pow2
+from .._scale import inverse_pow2, quotient
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA
 from ._base import (
     AbstractOperator,
@@ -160,8 +160,12 @@ class Reinhard2002Local(AbstractOperator):
         _, e_L = jnp.frexp(c_L)
         top = jnp.finfo(L.dtype).maxexp - 2
         unit = jnp.ldexp(jnp.ones((), L.dtype), jnp.clip(e_s + e_L - 2, -top, top))
+        # (key c_s) / L̄_w: the same bits as (key / L̄_w) c_s (c_s is a power of two), and a
+        # derivative that never meets d(out)/d(scale) ~ out / scale, which overflows when
+        # the scale is near the smallest normal (an image near the float maximum)
+        sc = quotient(self.key * c_s, self.log_average)
         V1m = local_adaptation(
-            (scale * c_s) * (L * c_L),
+            sc * (L * c_L),
             valid,
             self.key,
             phi=self.phi,
@@ -172,7 +176,7 @@ class Reinhard2002Local(AbstractOperator):
         # L_d / L_w = scale / (1 + V1_m) = (scale c_s) / (c + c V1_m) · c_L: no division by
         # the pixel's own luminance, and c_L applied to RGB first (the ratio alone can fall
         # below the smallest normal float when L_max is near the largest)
-        ratio = jnp.where(p.L > 0, (scale * c_s) / (unit + V1m), 0.0)
+        ratio = jnp.where(p.L > 0, quotient(sc, unit + V1m), 0.0)
         return (p.rgb * c_L) * ratio[..., None]
 
 

@@ -25,6 +25,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array
 
+from .._scale import divide
 from ._base import (
     AbstractLuminanceCurve,
     Prepared,
@@ -56,7 +57,7 @@ def tumblin_curve(
     den = 1.855 + 0.4 * (jnp.log(L_da) if gamma_log == "ln" else jnp.log10(L_da))
     g_wd = g_w / den
     m = jnp.power(C_max, (g_wd - 1.0) / 2.0)
-    ratio = jnp.maximum(L_w, 0.0) / L_wa
+    ratio = divide(jnp.maximum(L_w, 0.0), L_wa)  # no reciprocal of L_wa: it may be subnormal
     pos = ratio > 0
     # the exponent γ_w / γ_d exceeds 1 when L_wa > L_da: near the float maximum the power
     # leaves the float range; it saturates 1 % below the maximum (finite, and a no-op for
