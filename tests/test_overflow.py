@@ -132,3 +132,25 @@ def test_log_average_of_an_image_at_the_float_maximum():
     st = stats.measure(jnp.full((8, 8), MAX32, jnp.float32))
     for v in (st.log_average, st.log_average_trimmed):
         assert np.isfinite(v) and v > 0.999 * MAX32
+
+
+def test_operators_of_a_maximal_image_and_local_gradients_beside_a_lamp():
+    """An image of float32's largest value: the log-average rounded to +Inf, and Tumblin's
+    ``L_w / L_wa`` became ``L_w · (1/L_wa)`` with a subnormal reciprocal (0), so
+    ``tumblin_reinhard``'s white was the smallest normal and its output +Inf. A uniform
+    image maps to one grey: every pixel equals the first. And a 3e38 lamp made every image
+    and parameter gradient of ``reinhard2002_local`` NaN (``x / d²`` in JAX's derivative
+    of its ratio and ``out / scale`` in that of its scale)."""
+    img = jnp.full((4, 4, 3), MAX32, jnp.float32)
+    for name in ("tumblin_reinhard", "tumblin1999"):
+        out = np.asarray(hdrjax.tonemap(img, name))
+        assert np.all(np.isfinite(out)) and np.all(out == out[0, 0]), name
+    op = hdrjax.make_operator("reinhard2002_local", key=0.2, log_average=4.8)
+    lamp = _one_bright((8, 8), (3, 3))
+
+    def loss(o, x):
+        return jnp.sum(o(x))
+
+    g_op, g_x = jax.jit(jax.grad(loss, argnums=(0, 1)))(op, lamp)
+    for leaf in jax.tree_util.tree_leaves((g_op, g_x)):
+        assert np.all(np.isfinite(np.asarray(leaf)))
