@@ -19,6 +19,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array
 
+from .._scale import divide, quotient
 from ._base import (
     AbstractLuminanceCurve,
     AbstractOperator,
@@ -57,14 +58,6 @@ def _log1p_product(a: Array, x: Array) -> Array:
     return jnp.where(big, jnp.log(xb) + jnp.log(a + 1 / xb), jnp.log1p(a * xs))
 
 
-def _divide(x: Array, d: Array) -> Array:
-    """``x / d`` for an image ``x`` and a scalar ``d > 0`` up to the largest float: XLA
-    computes a division by a scalar as ``x · (1/d)``, and ``1/d`` is subnormal (flushed to
-    0 on CPU) once ``d > 1/tiny`` (8.5e37 in float32); both are divided by 8 first (exact)."""
-    c = jnp.where(d > 1, 0.125, 1.0).astype(d.dtype)
-    return (x * c) / (d * c)
-
-
 class _MaxNormalised(AbstractLuminanceCurve):
     """Operators whose only statistic is the largest luminance ``L_max``."""
 
@@ -94,7 +87,7 @@ class Normalisation(_MaxNormalised):
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
-        return L / self.L_max
+        return divide(L, self.L_max)
 
 
 @register("gamma")
@@ -128,10 +121,9 @@ class Logarithmic(_MaxNormalised):
     def _curve(self, L: Array) -> Array:
         q, k = jnp.maximum(self.q, 1.0), jnp.maximum(self.k, 1.0)
         # the base cancels: ln(1 + qL) / ln(1 + k L_max); ``log1p`` keeps a dim image's
-        # L_max (1 + k L_max == 1 below 6e-8 in float32: 0/0). A product with the
-        # reciprocal, not a quotient: were the result divided by L again, XLA would
-        # rewrite (a / b) / L as a / (b L), which underflows to 0 in a dim image (Inf)
-        return _log1p_product(q, L) * (1.0 / _log1p_product(k, self.L_max))
+        # L_max (1 + k L_max == 1 below 6e-8 in float32: 0/0); ``quotient``'s derivative
+        # has no 1 / ln(1 + k L_max)², which overflows for a dim image
+        return quotient(_log1p_product(q, L), _log1p_product(k, self.L_max))
 
 
 @register("exponential")
@@ -165,7 +157,7 @@ class LogarithmicMapping(_MaxNormalised):
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
-        r = jnp.log1p(self.p * L) / jnp.log1p(self.p * self.L_max)
+        r = quotient(jnp.log1p(self.p * L), jnp.log1p(self.p * self.L_max))
         pos = r > 0
         return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, r, 1.0)) / self.q), 0.0)
 
@@ -180,7 +172,7 @@ class ExponentiationMapping(_MaxNormalised):
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
-        r = L / self.L_max
+        r = divide(L, self.L_max)
         pos = r > 0
         return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, r, 1.0)) * self.p / self.q), 0.0)
 
@@ -211,7 +203,7 @@ class Schlick1994(_MaxNormalised):
         # the one curve overriding the shared mapping: its floor must be relative to L_max
         # (see the class docstring); the rest of the mapping is the same
         return scale_by_luminance(
-            _divide(p.rgb, self.L_max), _divide(p.L, self.L_max), self._relative_curve
+            divide(p.rgb, self.L_max), divide(p.L, self.L_max), self._relative_curve
         )
 
 
