@@ -110,10 +110,16 @@ def no_light(img, lo=0.0, hi=np.inf):
 
 def _cd(x):
     """cd/m² for the vision cases: half floats are promoted first (as the library does), so
-    the scaling itself does not overflow float16."""
+    the scaling itself does not overflow float16; finite values that the scaling would
+    take beyond the float range (the largest-scale families) saturate at its largest
+    finite value, so the function sees a finite pixel where the family has one."""
     if x.dtype == jnp.float16:
         x = x.astype(jnp.result_type(float))
-    return x * SCALE
+    if not jnp.issubdtype(x.dtype, jnp.floating):  # bad-input forms reach the function
+        return x * SCALE
+    y = x * SCALE
+    big = jnp.sign(x) * jnp.finfo(x.dtype).max
+    return jnp.where(jnp.isinf(y) & jnp.isfinite(x), big, y)
 
 
 # --- bad input (test_bad_input.py) ------------------------------------------------------

@@ -1,8 +1,10 @@
 """Registry-driven conformance: every registered operator, without anyone listing it.
 
-Hard cases from the foundation issue and issue 10 (tests/operators/cases.py) in float16,
-float32 and float64, degenerate shapes, finite gradients, jit == eager,
-vmap == loop, batch-shape independence, and NaN/Inf isolation.
+Hard cases from the foundation issue and issues 10 and 16 (tests/operators/cases.py:
+hard values, one kind of bad pixel at a time, every brightness scale of the dtype) in
+float16, float32 and float64, degenerate shapes, finite gradients (image and parameters,
+bad pixels and scales included), jit == eager, vmap == loop, batch-shape independence, and
+NaN/Inf isolation.
 """
 
 import equinox as eqx
@@ -15,7 +17,15 @@ import hdrjax
 from hdrjax.operators import AbstractLuminanceCurve, parameter_names
 
 from ..conftest import RTOL32, enable_x64
-from .cases import SINGLE_PIXEL, hard_cases, make, natural
+from .cases import (
+    SINGLE_PIXEL,
+    families,
+    gradient_families,
+    hard_cases,
+    make,
+    natural,
+    scale_cases,
+)
 
 NAMES = hdrjax.operator_names()
 LOCAL = ("reinhard2002_local", "reinhard2002_auto")  # neighbourhoods: test_reinhard2002.py
@@ -57,20 +67,27 @@ def _check_outputs(name, case, img, out):
 @pytest.mark.parametrize("dtype", [np.float16, np.float32, np.float64])
 @pytest.mark.parametrize("name", NAMES)
 def test_hard_cases_stay_finite(name, dtype, request):
+    """Every family (hard values, bad pixels, every scale from the smallest normal to the
+    largest finite value of the dtype): finite where the input is finite."""
     if dtype == np.float64:
         request.getfixturevalue("x64")
     op = make(name)
-    cases = hard_cases(dtype)
+    cases = families(dtype)
     batch = np.stack(list(cases.values()))  # one compile: frames are independent
     outs = np.asarray(eqx.filter_jit(lambda o, x: o(x))(op, batch))
     # half floats are computed and returned in the default float (float32 here)
     assert outs.dtype == (np.float32 if dtype == np.float16 else dtype)
+    failed = []
     for (case, img), out in zip(cases.items(), outs, strict=True):
-        _check_outputs(name, case, img, out)
+        try:
+            _check_outputs(name, case, img, out)
+        except AssertionError as e:  # every failing family, not only the first
+            failed.append(str(e).splitlines()[0])
+    assert not failed, f"{len(failed)} families: " + "; ".join(failed)
     one = SINGLE_PIXEL.astype(dtype)
     _check_outputs(name, "single_pixel", one, np.asarray(op(one)))
     # +Inf luminance is white, -Inf black, a NaN channel makes the pixel NaN
-    out = outs[-1]
+    out = outs[list(cases).index("nan_and_inf")]
     np.testing.assert_array_equal(out[1, 2], 1.0)
     np.testing.assert_array_equal(out[5, 5], 0.0)
     assert np.all(np.isnan(out[4, 5]))
@@ -101,10 +118,11 @@ def test_bad_pixels_do_not_reach_statistics_or_neighbours(name):
 
 @pytest.mark.parametrize("name", NAMES)
 def test_gradients_are_finite(name):
-    cases = hard_cases(np.float32)
-    batch = jnp.asarray(
-        np.stack([v for k, v in cases.items() if k != "nan_and_inf"] + [natural((8, 8))])
-    )
+    """Gradients of the sum of the finite outputs with respect to the image and to every
+    parameter are finite, at every finite pixel, for every family: bad pixels (NaN only,
+    +Inf only, -Inf only, mixed) and the scales of ``cases.GRAD_SCALES`` included."""
+    cases = {**gradient_families(), "natural": natural((8, 8))}
+    batch = jnp.asarray(np.stack(list(cases.values())))
     op = make(name)
     params, static = eqx.partition(op, eqx.is_inexact_array)
 
@@ -112,10 +130,20 @@ def test_gradients_are_finite(name):
         out = eqx.combine(p, static)(x)
         return jnp.sum(jnp.where(jnp.isfinite(out), out, 0.0))
 
-    gp, gx = jax.jit(jax.grad(loss, argnums=(0, 1)))(params, batch)
-    for leaf in jax.tree_util.tree_leaves((gp, gx)):
-        assert np.all(np.isfinite(np.asarray(leaf))), name
-    assert np.any(np.asarray(gx[-1]) != 0), name  # the output depends on the image
+    # one compile; per frame, so a failure names its family
+    grad = jax.jit(jax.vmap(jax.grad(loss, argnums=(0, 1)), in_axes=(None, 0)))
+    gp, gx = grad(params, batch)
+    gx = np.asarray(gx)
+    failed = []
+    for i, (family, img) in enumerate(cases.items()):
+        finite = np.all(np.isfinite(img), axis=-1)
+        if not np.all(np.isfinite(gx[i][finite])):
+            failed.append(f"{family}: image")
+        for path, leaf in jax.tree_util.tree_leaves_with_path(gp):
+            if not np.all(np.isfinite(np.asarray(leaf)[i])):
+                failed.append(f"{family}: {jax.tree_util.keystr(path)}")
+    assert not failed, f"{name}: non-finite gradients: " + "; ".join(failed)
+    assert np.any(gx[-1] != 0), name  # the output depends on the image
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -198,3 +226,49 @@ def test_global_curves_are_monotone_in_luminance(name):
         assert np.all(np.diff(out) >= -1e-6 * np.maximum(np.abs(out[1:]), 1e-30)), name
 
     check()
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize(
+    "name,params", [("logarithmic", dict(q=3.0, k=2.0)), ("schlick1994", dict(p=20.0))]
+)
+def test_dim_and_bright_images_keep_their_values(name, params, dtype, request):
+    """Issue 16.2: logarithmic and Schlick give colour-hdri's values (the formulas in
+    float64 NumPy, as in test_colour_hdri_parity.py) for the natural image at every scale
+    of the dtype, not only where ``1 + k L_max`` differs from 1 (logarithmic) or the
+    luminance floor is far below ``L_max`` (Schlick). Compared at the pixels whose channels
+    are normal floats (XLA:CPU flushes subnormals to zero); logarithmic up to L = 1e37 in
+    float32 (above, its ratio ``L_d / L`` is below the smallest normal float: the shared
+    mapping's concern, whose outputs the scale families check)."""
+    if dtype == np.float64:
+        request.getfixturevalue("x64")
+    frames = scale_cases(dtype, 0, float("inf"))
+    batch = np.stack(list(frames.values()))
+    outs = np.asarray(eqx.filter_jit(lambda o, x: o(x))(make(name, **params), batch))
+    w = np.asarray(hdrjax.REC709_WEIGHTS)
+    fi = np.finfo(dtype)
+    compared = 0
+    for family, img, out in zip(frames, batch, outs, strict=True):
+        x = img.astype(np.float64)
+        L = x @ w
+        L_max = L.max()
+        if name == "logarithmic":
+            with np.errstate(over="ignore"):  # 3 L beyond float64's range: ln 3 + ln L
+                num = np.where(L < 1, np.log1p(3 * L), np.log(L) + np.log(3 + 1 / L))
+            Ld = num / (
+                np.log(L_max) + np.log(2 + 1 / L_max) if L_max >= 1 else np.log1p(2 * L_max)
+            )
+            keep = L < (1e37 if dtype == np.float32 else 1e300)
+        else:
+            r = L / L_max
+            Ld = 20 * r / (19 * r + 1)
+            keep = np.ones(L.shape, bool)
+        keep &= np.all(x * w >= fi.tiny, axis=-1)  # every term of the luminance normal
+        if not keep.any():  # the frame at finfo.tiny: flushed to black
+            continue
+        compared += 1
+        ref = x * (Ld / L)[..., None]
+        np.testing.assert_allclose(
+            out[keep], ref[keep], rtol=RTOL32 if dtype == np.float32 else 1e-12, err_msg=family
+        )
+    assert compared >= len(frames) - 2  # all but the frames at (and next to) tiny
