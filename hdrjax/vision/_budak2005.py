@@ -38,11 +38,14 @@ import abc
 from collections.abc import Sequence
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from .._scale import quotient
 from ..display import gamma_encode
 from ._fovea import adaptation_luminance
 from ._pcond import tvi
@@ -64,6 +67,31 @@ def _f(t: Array) -> Array:
     return jnp.where(big, jnp.cbrt(jnp.where(big, t, 1.0)), t / (3 * _D**2) + 4.0 / 29.0)
 
 
+def _f_ratio(num: Array, den: Array) -> Array:
+    """``_f(num / den)`` for ``den > 0``; where the quotient overflows (a pixel near the
+    float maximum over a dim background), ``cbrt(num) / cbrt(den)`` (the same value,
+    representable) — chosen before the root, so that neither branch's derivative is 0·∞."""
+    q = num / den
+    big = ~jnp.isfinite(jax.lax.stop_gradient(q)) & (num > 0)
+    root = jnp.cbrt(jnp.where(big, num, 1.0)) / jnp.cbrt(den)
+    return jnp.where(big, root, _f(jnp.where(big, 1.0, num) / den))
+
+
+def _finv_scaled(u: Array, n: Array) -> Array:
+    """``n · _finv(u)`` for ``n > 0``, with ``|u|`` capped so that it stays below
+    :data:`SATURATION` of the float maximum (values beyond it saturate there)."""
+    top = jnp.finfo(u.dtype).max * SATURATION
+    cap = jax.lax.stop_gradient(jnp.cbrt(top) / jnp.cbrt(jnp.maximum(n, 1.0)))
+    return n * _finv(jnp.clip(u, -cap, cap))
+
+
+SATURATION = 2.0**-6
+"""Fraction of the float maximum at which the re-adapted luminance and cone responses
+saturate: the display RGB computed from them (inverse colour matrix, rows up to 5 in
+absolute sum) then stays finite. Reached only by scene values within a factor of about
+100 of the float maximum, or far above the display's adaptation."""
+
+
 def _finv(u: Array) -> Array:
     return jnp.where(u > _D, u**3, 3 * _D**2 * (u - 4.0 / 29.0))
 
@@ -80,7 +108,11 @@ def fechner_brightness(
     _check.real(L, "L")
     L = jnp.maximum(_as_float(L), LMIN)
     L_a = jnp.maximum(_as_float(L_a), LMIN)
-    return (L_a / tvi(L_a)) * jnp.log(L / L_a)
+    # L / L_a overflows for L near the float maximum and a dim L_a: ln L − ln L_a there
+    # (where-before-log, so that neither branch's derivative is 0·∞)
+    big = ~jnp.isfinite(jax.lax.stop_gradient(L / L_a))
+    ln = jnp.where(big, jnp.log(L) - jnp.log(L_a), jnp.log(jnp.where(big, L_a, L) / L_a))
+    return (L_a / tvi(L_a)) * ln
 
 
 def fechner_luminance(
@@ -89,7 +121,10 @@ def fechner_luminance(
     """Inverse of :func:`fechner_brightness`: ``L = L_a exp(B ΔL(L_a)/L_a)``."""
     _check.real(B, "B")
     L_a = jnp.maximum(_as_float(L_a), LMIN)
-    return L_a * jnp.exp(_as_float(B) * tvi(L_a) / L_a)
+    arg = _as_float(B) * tvi(L_a) / L_a
+    # saturates at SATURATION × the float maximum (+Inf, and NaN colours, before)
+    top = jnp.log(jnp.finfo(arg.dtype).max * SATURATION)
+    return L_a * jnp.exp(jnp.minimum(arg, top - jnp.maximum(jnp.log(L_a), 0.0)))
 
 
 class AbstractContrastSpace(eqx.Module):
@@ -139,9 +174,9 @@ class ConeOpponentSpace(AbstractContrastSpace):
         Lb, Sb = self._cones(*background)
         Yb = background[1]
         Lc, Sc = self._cones(X, Y, Z)
-        fy = _f(Y / Yb)
-        a = 500.0 * (_f(Lc / Lb) - fy)
-        b = 200.0 * (fy - _f(Sc / Sb))
+        fy = _f_ratio(Y, Yb)
+        a = 500.0 * (_f_ratio(Lc, Lb) - fy)
+        b = 200.0 * (fy - _f_ratio(Sc, Sb))
         return jnp.stack([fechner_brightness(Y, Yb), a, b], axis=-1)
 
     def inverse(self, coords, background):
@@ -149,9 +184,9 @@ class ConeOpponentSpace(AbstractContrastSpace):
         Lb, Sb = self._cones(*background)
         Yb = background[1]
         Y = fechner_luminance(B, Yb)
-        fy = _f(Y / Yb)
-        Lc = Lb * _finv(fy + a / 500.0)
-        Sc = Sb * _finv(fy - b / 200.0)
+        fy = _f_ratio(Y, Yb)
+        Lc = _finv_scaled(fy + a / 500.0, Lb)
+        Sc = _finv_scaled(fy - b / 200.0, Sb)
         m = self.cone_matrix  # solve the L and S rows for X and Z given Y
         r1 = Lc - m[0][1] * Y
         r2 = Sc - m[2][1] * Y
@@ -213,12 +248,16 @@ class Budak2005(eqx.Module):
         else:
             La = jnp.maximum(_as_float(self.adaptation), LMIN).astype(Y.dtype)
         # background chromaticity: mean XYZ of the finite pixels (the seed's m'_p)
+        # (only their ratios are used: summed times 2^-k, k = ceil(log2 of the pixel
+        # count), so that the sums cannot overflow, exact for pixels above 2^-100 cd/m²;
+        # quotient, whose derivative has no mY²: NaN gradients at every pixel before)
         n = jnp.maximum(jnp.sum(ok), 1)
-        mX, mY, mZ = (jnp.sum(jnp.where(ok, c, 0.0)) / n for c in (X, Y, Z))
+        k = np.ldexp(1.0, -int(np.ceil(np.log2(max(ok.size, 1)))))
+        mX, mY, mZ = (jnp.sum(jnp.where(ok, c * k, 0.0)) / n for c in (X, Y, Z))
         good = (mY > 0) & (mX > 0) & (mZ > 0)
         wX, wZ = float(m[0].sum()), float(m[2].sum())  # white of the primaries, Y = 1
-        rX = jnp.where(good, mX / jnp.where(good, mY, 1.0), wX)
-        rZ = jnp.where(good, mZ / jnp.where(good, mY, 1.0), wZ)
+        rX = jnp.where(good, quotient(mX, jnp.where(good, mY, 1.0)), wX)
+        rZ = jnp.where(good, quotient(mZ, jnp.where(good, mY, 1.0)), wZ)
         coords = self.space.forward((X, Y, Z), (rX * La, La, rZ * La))
         Lda = 0.5 * self.display_max
         Xd, Yd, Zd = self.space.inverse(coords, (rX * Lda, jnp.asarray(Lda, Y.dtype), rZ * Lda))

@@ -23,17 +23,18 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._scale import at_scale
 from ._ferwerda1996 import _log10_safe
 from ._photometry import (
     _as_float,
     _chroma_key,
+    _scotopic,
     check_rgb,
     headroom,
     largest_component_reciprocal,
     restore,
     rgb_to_xyz,
     sanitize,
-    scotopic_luminance,
     xyz_to_rgb,
 )
 
@@ -74,11 +75,16 @@ def blue_shift(
 def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     x_, ok = sanitize(rgb)
     # linear in the pixel but for s: computed on the pixel × c (exact, 1 below 2^64 cd/m²),
-    # whose XYZ cannot overflow (Z of a white is 1.09 RGB; the inverse matrix reaches 3.2)
-    c = headroom(x_)
-    x_ = x_ * c
+    # whose XYZ cannot overflow (Z of a white is 1.09 RGB; the inverse matrix reaches 3.2);
+    # at_scale keeps the backward pass from carrying the cotangent 1/c through it
+    out = at_scale(functools.partial(_blue_shift_scaled, chromaticities), x_, headroom(x_))
+    return restore(out, rgb, ok)
+
+
+def _blue_shift_scaled(chromaticities: tuple[float, ...] | None, x_: Array, c: Array) -> Array:
+    """Blue shift of the pixels ``x_`` = RGB × ``c`` (``c`` per pixel), times ``c``."""
     X, Y, Z = rgb_to_xyz(x_, chromaticities)
-    V = scotopic_luminance(x_, chromaticities=chromaticities)
+    V = _scotopic(x_, chromaticities)  # x_ is scaled already
     s = blue_shift_weight(Y / c[..., 0])
     # chromaticity from X, Y, Z over the pixel's largest |X|, |Y|, |Z| (constant under
     # differentiation): d(X/tot)/d tot = -X/tot² would over/underflow tot² at 1e±20 cd/m²
@@ -97,7 +103,7 @@ def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     Xn = jnp.where(good, cx * Yn / cys, X)
     Zn = jnp.where(good, (1.0 - cx - cy) * Yn / cys, Z)
     Yn = jnp.where(good, Yn, Y)
-    return restore(xyz_to_rgb(Xn, Yn, Zn, chromaticities) / c, rgb, ok)
+    return xyz_to_rgb(Xn, Yn, Zn, chromaticities)
 
 
 __all__ = ["BLUE_WHITE", "ROD_SCALE", "blue_shift", "blue_shift_weight"]

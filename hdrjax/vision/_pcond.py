@@ -18,6 +18,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from .._scale import at_scale
 from . import _fft
 from ._ferwerda1996 import _log10_safe
 from ._fovea import block_mean, upsample
@@ -28,11 +29,11 @@ from ._photometry import (
     TOP_MESOPIC,
     _as_float,
     _chroma_key,
+    _scotopic,
     check_rgb,
     headroom,
     restore,
     sanitize,
-    scotopic_luminance,
     weights_of,
 )
 from ._view import ResolvedView, View, resolve_view
@@ -115,9 +116,17 @@ def colour_loss(
 @functools.partial(jax.jit, static_argnums=1)
 def _colour_loss(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
     x, ok = sanitize(rgb)
-    c = mesopic_weight(luminance(x, weights_of(chromaticities)))[..., None]
-    V = scotopic_luminance(x, chromaticities=chromaticities)[..., None]
-    return restore(c * x + (1.0 - c) * (V / SWNORM), rgb, ok)
+    # linear in the pixel but for c: on the pixel × an exact power of two (1 below 2^64
+    # cd/m², same bits), so that the derivative's c·x − c·V/2.26 terms cannot overflow
+    # (NaN image gradients of pixels near the float maximum)
+    out = at_scale(functools.partial(_colour_loss_scaled, chromaticities), x, headroom(x))
+    return restore(out, rgb, ok)
+
+
+def _colour_loss_scaled(chromaticities: tuple[float, ...] | None, x: Array, h: Array) -> Array:
+    c = mesopic_weight(luminance(x, weights_of(chromaticities)) / h[..., 0])[..., None]
+    V = _scotopic(x, chromaticities)[..., None]  # x is scaled already
+    return c * x + (1.0 - c) * (V / SWNORM)
 
 
 def veil_kernel(view: ResolvedView, fovea_shape: tuple[int, int]) -> np.ndarray:

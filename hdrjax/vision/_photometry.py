@@ -19,7 +19,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_CHROMATICITIES, luminance, luminance_weights
-from .._scale import inverse_pow2
+from .._scale import at_scale, inverse_pow2
 
 LMIN = 1e-7
 """Smallest visible world luminance, cd/m² (pcond.h ``LMIN``)."""
@@ -161,7 +161,8 @@ def scotopic_luminance(
     ``X_eff = (|Y| + |Z|)/300`` in place of ``X`` (the formula's value is continuous there);
     ``cielum`` itself would return up to ``±∞`` as ``X → 0⁺``. Numerics: the ratio is formed
     from X, Y, Z scaled by :func:`largest_component_reciprocal`, so value and gradient stay
-    finite from 1e-38 to 1e33 cd/m² in float32 (``d/dX (Y + Z)/X = -(Y + Z)/X²`` of the
+    finite from 1e-38 cd/m² to the float maximum (a ``V`` beyond the float range saturates at
+    the largest float) (``d/dX (Y + Z)/X = -(Y + Z)/X²`` of the
     unscaled formula over- or underflows ``X²`` beyond 1e±19).
 
     Args:
@@ -171,6 +172,15 @@ def scotopic_luminance(
     Returns:
         ``V`` with shape ``rgb.shape[:-1]``.
     """
+    rgb = check_rgb(rgb)
+    # homogeneous of degree 1: evaluated on RGB × an exact power of two (1 below 2^64
+    # cd/m², same bits), whose XYZ cannot overflow (Z of a white is 1.09 RGB)
+    f = lambda x, _: _scotopic(x, chromaticities)[..., None]  # noqa: E731
+    V = at_scale(f, rgb, headroom(rgb))[..., 0]
+    return jnp.minimum(V, jnp.finfo(V.dtype).max)  # V/Y reaches 4.4: saturate
+
+
+def _scotopic(rgb: Array, chromaticities: Sequence[float] | None) -> Array:
     X, Y, Z = rgb_to_xyz(rgb, chromaticities)
     r = largest_component_reciprocal(X, Y, Z)
     x, y, z = X * r, Y * r, Z * r  # the largest of |x|, |y|, |z| is 1
