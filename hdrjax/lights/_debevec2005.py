@@ -35,6 +35,9 @@ from ._geometry import azel_to_direction
 from ._loghin2019 import _flat_float, _image_shape, _weights, _working_rgb, _working_size
 from ._result import MedianCutLights
 
+SCALE_EXP = 4
+"""Energies are summed times ``2^-SCALE_EXP`` (see :func:`_median_cut_one`)."""
+
 
 def _prefix(x: Array) -> Array:
     """Row prefix sums with a leading zero column: ``(H, W + 1)``."""
@@ -55,7 +58,12 @@ def _median_cut_one(
     L = jnp.maximum(luminance(rgb_w, weights), 0)
     el = np.pi * (0.5 - (np.arange(H) + 0.5) / H)
     theta = np.pi * np.arange(H + 1) / H
-    domega = jnp.asarray(2 * np.pi * (np.cos(theta[:-1]) - np.cos(theta[1:])) / W, dt)
+    # solid angles times 2^-SCALE_EXP (exact): the sphere's 4π < 2^SCALE_EXP, so no sum of
+    # E or RGB dω overflows for pixels up to the float maximum (the map's total 4π·1e38 did:
+    # +Inf energy, NaN share); ratios and cuts are unchanged, the sums scaled back at the end
+    domega = jnp.asarray(
+        np.ldexp(2 * np.pi * (np.cos(theta[:-1]) - np.cos(theta[1:])) / W, -SCALE_EXP), dt
+    )
     az = 2 * np.pi * ((np.arange(W) + 0.5) / W - 0.5)
     ce, se = jnp.asarray(np.cos(el), dt), jnp.asarray(np.sin(el), dt)
     ca, sa = jnp.asarray(np.cos(az), dt), jnp.asarray(np.sin(az), dt)
@@ -134,11 +142,16 @@ def _median_cut_one(
     rgb_dw = rgb_w * domega[:, None, None]
     irr = jnp.stack([region_sum(_prefix(rgb_dw[..., c])) for c in range(3)], -1)
     total = accurate_sum(E)
+    top = jnp.finfo(dt).max
+
+    def unscale(v: Array) -> Array:  # saturates beyond the float range
+        return jnp.clip(v * 2.0**SCALE_EXP, -top, top)
+
     in_h, in_w = in_hw
     return dict(
         direction=direction,
-        irradiance=irr,
-        energy=energy,
+        irradiance=unscale(irr),
+        energy=unscale(energy),
         energy_share=energy / jnp.where(total > 0, total, 1.0),
         region=jnp.stack([x0, y0, x1, y1], -1).astype(jnp.int32),
     )
@@ -177,7 +190,9 @@ def median_cut(
 
     Returns:
         :class:`MedianCutLights`; ``irradiance`` sums to the map's ∑ RGB dω and
-        ``energy_share`` to 1 (the regions partition the map).
+        ``energy_share`` to 1 (the regions partition the map). A region's ``energy`` or
+        ``irradiance`` beyond the float range (pixels near the float maximum) saturates at
+        the largest float; ``energy_share`` stays exact.
     """
     if isinstance(n_lights, bool) or int(n_lights) != n_lights or n_lights < 1:
         raise ValueError(f"n_lights: expected a power of two >= 1, got {n_lights!r}")

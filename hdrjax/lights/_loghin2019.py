@@ -99,6 +99,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
+from .._scale import inverse_pow2
 from .._stats import accurate_sum
 from ._result import Lights
 from ._sequences import halton_np, sphere_directions_np
@@ -626,6 +627,11 @@ def _domega(plan: _Plan) -> np.ndarray:
     return _row_geometry(plan.h)[2] / plan.w if plan.sphere else np.ones(plan.h)
 
 
+def _total_exp(plan: _Plan) -> int:
+    """``k`` with ``2^k`` ≥ the map's ∑ dω (4π on the sphere, the pixel count on a plane)."""
+    return max(int(np.ceil(np.log2(plan.w * _domega(plan).sum()))), 0)
+
+
 def _smooth(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
     """Step 2 and the per-pixel passes over the map that need no threshold, materialised
     once (a call boundary: fused into their consumers they were recomputed per read):
@@ -651,7 +657,10 @@ def _smooth(rgb_w: Array, L_peak: Array, plan: _Plan) -> dict[str, Array]:
     strips = {
         k: jnp.concatenate([v[:, v.shape[1] - n :], v[:, :n]], axis=1) for k, v in chans.items()
     }
-    total = accurate_sum(L * jnp.asarray(_domega(plan), L.dtype)[:, None])
+    # the map's energy times 2^-k (exact), 2^k ≥ the map's ∑ dω (4π on the sphere, the pixel
+    # count on a plane): no overflow for pixels near the float maximum
+    dw = np.ldexp(_domega(plan), -_total_exp(plan))
+    total = accurate_sum(L * jnp.asarray(dw, L.dtype)[:, None])
     # Lb is L when unblurred: returned once (a second output of the same image is a copy)
     blurred = dict(Lb=Lb) if plan.blur > 0 else {}
     return dict(L=L, V=V, I=I, strips=strips, total=total, top=jnp.max(L_peak)) | blurred
@@ -929,29 +938,40 @@ def _find(
         # weights (dω, sin/cos of elevation and of x0's azimuth); ~10 reductions over the
         # whole windows cost several times more
         ownf = own.astype(dt)
+        # the sums run on values times an exact power of two that brings the map's largest
+        # luminance to at most 2^(maxexp/2) (1 for ordinary maps: the same bits): sums of
+        # pixels near the float maximum overflowed (a NaN light position); energies and
+        # colour sums beyond the float range saturate at the largest float
+        lim = 2.0 ** (jnp.finfo(dt).maxexp // 2)
+        top = smooth["top"]
+        c = jnp.where(jnp.isfinite(top) & (top > lim), inverse_pow2(top) * lim, 1.0).astype(dt)
         offs = np.arange(-rx_, rx_ + 1)
         ang = offs * (2 * np.pi / W)
         colw = jnp.asarray(np.stack([np.ones(PX), offs, np.cos(ang), np.sin(ang)], 1), dt)
-        A = ((Lw * ownf).reshape(K * PY, PX) @ colw).reshape(K, PY, 4)
+        A = ((Lw * c * ownf).reshape(K * PY, PX) @ colw).reshape(K, PY, 4)
         n_row = jnp.sum(ownf, axis=-1)  # (K, PY)
         rgb_w_ = window("rgb", rgb_w)  # (K, PY, PX, 3)
         csum = (
-            (ownf[..., None] * rgb_w_).reshape(K * PY, PX * 3)
+            (ownf[..., None] * (rgb_w_ * c)).reshape(K * PY, PX * 3)
             @ jnp.asarray(np.tile(np.eye(3), (PX, 1)), dt)
         ).reshape(K, PY, 3)
         dom = domega[Y]  # (K, PY)
         de = dom * A[..., 0]  # each row's energy
-        energy = jnp.sum(de, axis=1)
+        energy_c = jnp.sum(de, axis=1)  # times c
         omega = jnp.sum(dom * n_row, axis=1)
-        rgb_sum = jnp.sum(dom[..., None] * csum, axis=1)
+        rgb_sum_c = jnp.sum(dom[..., None] * csum, axis=1)
         safe_omega = jnp.where(omega > 0, omega, 1.0)
-        colour = rgb_sum / safe_omega[:, None]
-        mean_lum = energy / safe_omega
+        big = jnp.finfo(dt).max
+        colour = jnp.clip(rgb_sum_c / safe_omega[:, None] / c, -big, big)
+        mean_lum = jnp.minimum(energy_c / safe_omega / c, big)
+        energy = jnp.minimum(energy_c / c, big)
+        rgb_sum = jnp.clip(rgb_sum_c / c, -big, big)
         n_pix = jnp.sum(n_row, axis=1).astype(jnp.int32)
-        lvalid = lvalid & (n_pix > 0) & (energy > 0)
+        lvalid = lvalid & (n_pix > 0) & (energy_c > 0)
         peak = jnp.max(jnp.where(own, window("peak", L_peak), 0), axis=(1, 2))
-        total = smooth["total"]
-        share = energy / jnp.where(total > 0, total, 1.0)
+        # the map's energy times c (exact)
+        total = smooth["total"] * (c * np.ldexp(1.0, _total_exp(plan)))
+        share = energy_c / jnp.where(total > 0, total, 1.0)
         scale_x, scale_y = plan.in_w / W, plan.in_h / H
         if plan.sphere:
             # azimuth of column x0 + o: az(x0) + o·2π/W (sin/cos by the angle sum)
@@ -973,7 +993,7 @@ def _find(
         # energy-weighted mean pixel position, columns unwrapped around the window centre (no
         # trigonometry here: XLA:CPU compiles each transcendental into a large kernel; the
         # azimuth, elevation and angular size are computed from these on demand)
-        safe_e = jnp.where(energy > 0, energy, 1.0)
+        safe_e = jnp.where(energy_c > 0, energy_c, 1.0)
         cxw = wx.astype(dt) + jnp.sum(dom * A[..., 1], axis=1) / safe_e
         cxw = jnp.mod(cxw + 0.5, W) - 0.5 if plan.sphere else cxw
         cyw = jnp.sum(de * Y, axis=1) / safe_e
@@ -986,7 +1006,7 @@ def _find(
         n_samples = jnp.sum(clab[None, :] == jnp.arange(K)[:, None], axis=1)
 
         # largest energy first; relabel
-        order = jnp.argsort(-jnp.where(lvalid, energy, -1.0), stable=True)
+        order = jnp.argsort(-jnp.where(lvalid, energy_c, -1.0), stable=True)
         inv = jnp.zeros(K, jnp.int32).at[order].set(jnp.arange(K, dtype=jnp.int32))
         lvalid = lvalid[order]
         count = jnp.sum(lvalid)
