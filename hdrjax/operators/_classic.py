@@ -17,9 +17,10 @@ operators.
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array
 
-from .._scale import divide, quotient
+from .._scale import divide, ln_max, quotient
 from ._base import (
     AbstractLuminanceCurve,
     AbstractOperator,
@@ -92,7 +93,11 @@ class Normalisation(_MaxNormalised):
 
 @register("gamma")
 class Gamma(AbstractOperator):
-    """``(2^EV · RGB)^(1/gamma)`` per channel (colour-hdri ``tonemapping_operator_gamma``)."""
+    """``(2^EV · RGB)^(1/gamma)`` per channel (colour-hdri ``tonemapping_operator_gamma``).
+
+    Where ``2^EV · RGB`` overflows although the pixel is finite, the power is computed as
+    ``exp((EV ln 2 + ln RGB) / gamma)``; results beyond the float range saturate at the
+    largest float (image gradients stay finite). Other pixels: colour-hdri's formula."""
 
     gamma: Array = eqx.field(default=1.0, converter=param)
     EV: Array = eqx.field(default=0.0, converter=param)
@@ -101,9 +106,20 @@ class Gamma(AbstractOperator):
         return self
 
     def _apply(self, p: Prepared) -> Array:
-        c = jnp.exp2(self.EV) * jnp.maximum(p.rgb, 0.0)
+        x = jnp.maximum(p.rgb, 0.0)
+        c = jnp.exp2(self.EV) * x
         pos = c > 0
-        return jnp.where(pos, jnp.exp(jnp.log(jnp.where(pos, c, 1.0)) / self.gamma), 0.0)
+        over = jnp.isinf(c) & jnp.isfinite(x)  # (where-before-log: no 0·∞ derivative)
+        ln = jnp.where(
+            over,
+            self.EV * np.log(2.0) + jnp.log(jnp.where(over, x, 1.0)),
+            jnp.log(jnp.where(pos & ~over, c, 1.0)),
+        )
+        e = ln / self.gamma
+        top = ln_max(e.dtype)
+        sat = jnp.isfinite(e) & (e > top)
+        out = jnp.where(sat, jnp.finfo(e.dtype).max, jnp.exp(jnp.where(sat, 0.0, e)))
+        return jnp.where(pos, out, 0.0)
 
 
 @register("logarithmic")
