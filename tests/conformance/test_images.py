@@ -78,6 +78,37 @@ def _expected_dtype(dtype):
     return np.float64 if dtype == np.float64 else np.float32
 
 
+_MAX = ("flat_max", "one_max")
+_TOP32 = ("scale_3.4e+38", "flat_max", "one_max", "one_huge")
+_TOP64 = ("scale_1.8e+308", "flat_max", "one_max", "one_huge")
+KNOWN_OPEN = {
+    # issue 16.3, still open: the luminance of a pixel at the float maximum in every
+    # channel rounds past the largest float (+Inf), so these statistics see no finite light
+    ("estimate.desaturation_threshold", "float32"): ("flat_max",),
+    ("estimate.desaturation_threshold", "float64"): ("flat_max",),
+    ("highlight_threshold", "float32"): ("flat_max",),
+    ("highlight_threshold", "float64"): ("flat_max",),
+    ("stats.percentile", "float32"): ("flat_max",),
+    ("tile.statistics", "float32"): ("flat_max",),
+    # bilinear weights times the float64 maximum round past it
+    ("panorama.fisheye_to_equirect", "float64"): ("flat_max",),
+    ("panorama.polar_to_cartesian", "float64"): ("flat_max",),
+    ("vision.veil", "float64"): ("flat_max",),
+    # the vision cases at the float maximum in cd/m² (Jensen's and pcond's colour steps)
+    ("vision.blue_shift", "float32"): _TOP32,
+    ("vision.blue_shift", "float64"): _TOP64,
+    ("vision.HumanVision[blue_shift]", "float32"): _MAX,
+    ("vision.HumanVision[blue_shift]", "float64"): _MAX,
+    **{
+        (f"vision.simulate[{e}]", "float32"): _TOP32
+        for e in ("acuity", "blue_shift", "colour_loss", "contrast", "glare")
+    },
+}
+"""(case, dtype) → families whose non-finite outputs are known defects not fixed yet: the
+test reports them as xfailed (never as passed), fails on any other family, and fails when
+one of them is fixed so that the entry is removed."""
+
+
 @pytest.mark.parametrize(
     "name,dtype",
     [(n, np.dtype(d).type) for n in NAMES for d in CASES[n].dtypes],
@@ -90,7 +121,8 @@ def test_hard_families(name, dtype):
         outs = _run(case, batch)
     for leaf in float_leaves(outs) if case.jit else ():  # NumPy side: documented per function
         assert leaf.dtype == _expected_dtype(dtype), f"{name}: {dtype} in, {leaf.dtype} out"
-    failed = []
+    failed, known = [], []
+    open_here = KNOWN_OPEN.get((name, np.dtype(dtype).name), ())
     for i, (family, img) in enumerate(cases.items()):
         out = jax.tree_util.tree_map(lambda v, i=i: np.asarray(v)[i], outs)
         with np.errstate(over="ignore", invalid="ignore"):  # float64 view of max-scale frames
@@ -98,8 +130,12 @@ def test_hard_families(name, dtype):
         try:
             _check_finite(name, case, family, img64, out)
         except AssertionError as e:  # every failing family, not only the first
-            failed.append(str(e).splitlines()[0])
+            (known if family in open_here else failed).append(str(e).splitlines()[0])
     assert not failed, f"{len(failed)} families: " + "; ".join(failed)
+    fixed = sorted(set(open_here) - {k.split("/")[1].split(":")[0] for k in known})
+    assert not fixed, f"{name}: fixed, remove from KNOWN_OPEN: {fixed}"
+    if known:  # reported as xfailed, never as passed
+        pytest.xfail(f"{len(known)} known-open families (KNOWN_OPEN): " + "; ".join(known))
 
 
 @pytest.mark.parametrize("name", NAMES)
