@@ -89,42 +89,6 @@ def test_tumblin_power_saturates_below_the_float_maximum():
     assert np.all(np.isfinite(np.asarray(hdrjax.tonemap(lamp, "tumblin_reinhard"))))
 
 
-def test_scale_invariant_operators_keep_their_brightest_pixels_near_the_float_maximum():
-    """``C · L_d / L_w`` underflowed to 0 for ``L_w`` beyond 2^126, and ``L / L_max`` for
-    ``L_max`` beyond 1/tiny (XLA divides by a scalar as a product with its reciprocal):
-    the brightest pixels (every pixel, for ``linear``) were black. ``linear`` and
-    ``reinhard2002`` with measured parameters are scale invariant: the image scaled to a
-    3e38 maximum maps as the same image 2^100 times dimmer (an exact scaling)."""
-    img = natural((8, 8)).astype(np.float64)
-    big = (img / img.max() * BIG).astype(np.float32)
-    small = (big.astype(np.float64) * 2.0**-100).astype(np.float32)
-    for name in ("linear", "reinhard2002"):
-        a, b = np.asarray(hdrjax.tonemap(np.stack([big, small]), name))
-        assert np.all(a.max(axis=-1) > 0), name
-        np.testing.assert_allclose(a, b, rtol=2e-3, err_msg=name)
-
-
-def test_image_gradients_of_very_bright_and_very_dim_images():
-    """JAX's derivative of ``x / d`` has ``x / d²``, which overflows (d below 2^-64) or
-    underflows against an overflowing sum (d above 2^64); ``1.5 · L_max`` in the JGT
-    white's untaken branch overflowed. Gradients of a scale-invariant operator scale as
-    ``1 / s`` (exact powers of two; 2^-120 keeps them normal): ``linear`` against scale 1,
-    ``reinhard2002`` (whose log-average adds δ = 1e-6, so it is scale invariant only
-    where δ is negligible) against scale 2^60."""
-    img = natural((8, 8)).astype(np.float64)
-    img = img / img.max()
-    ks = (0, 60, 120, -100)
-    frames = np.stack([img * 2.0**k for k in ks]).astype(np.float32)
-    for name, ref, checks in (("linear", 0, (120, -100)), ("reinhard2002", 60, (120,))):
-        loss = lambda x, name=name: jnp.sum(hdrjax.tonemap(x, name) @ jnp.arange(3.0))  # noqa: E731
-        g = np.asarray(jax.jit(jax.vmap(jax.grad(loss)))(frames)).astype(np.float64)
-        assert np.all(np.isfinite(g)), name
-        g0 = g[ks.index(ref)] * 2.0**ref
-        for k in checks:
-            # float32 rounding differs with the scale (histogram bins, sums): 0.5 %
-            np.testing.assert_allclose(g[ks.index(k)] * 2.0**k, g0, rtol=5e-3, atol=1e-6)
-
-
 def test_log_average_of_an_image_at_the_float_maximum():
     """``exp(mean ln L)`` rounded past the maximum for an image of maximal pixels: +Inf."""
     from hdrjax import stats

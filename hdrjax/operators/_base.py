@@ -28,7 +28,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
-from .._scale import ln_max, quotient
+from .._scale import ln_max
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, measure, measure_checked
 
 _Op = TypeVar("_Op", bound="AbstractOperator")
@@ -162,12 +162,8 @@ def scale_by_luminance(
         L = jnp.broadcast_to(L[..., None], rgb.shape)
     pos = L > 0
     Lc = jnp.maximum(jnp.where(pos, L, 1.0), luminance_floor(L.dtype))
-    # the colour ratio C_in / L_w first (about 1 to 1/w_min), then times L_d: the ratio
-    # L_d / L_w itself underflows to 0 for L_w above ~2^126 (float32), which made the
-    # brightest pixels black; the same operations per channel as rgb · (L_d / L_w)
-    if per_channel:
-        return jnp.where(pos, quotient(rgb, Lc), 0.0) * curve(Lc)
-    return jnp.where(pos[..., None], quotient(rgb, Lc[..., None]), 0.0) * curve(Lc)[..., None]
+    ratio = jnp.where(pos, curve(Lc) / Lc, 0.0)
+    return rgb * (ratio if per_channel else ratio[..., None])
 
 
 def safe_log(x: Array) -> Array:

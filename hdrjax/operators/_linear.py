@@ -16,7 +16,6 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
-from .._scale import divide
 from ._base import AbstractLuminanceCurve, Prepared, max_luminance, param, register, weights_field
 
 Q_FACTOR = (math.pi / 4.0) * 0.9 * 0.98 * math.cos(math.radians(10.0)) ** 4
@@ -82,7 +81,7 @@ class Linear(AbstractLuminanceCurve):
         return Linear(L_max=L_max, q=self.q, weights=self.weights)
 
     def _curve(self, L: Array) -> Array:
-        return divide(L, self.L_max)
+        return L / self.L_max
 
 
 __all__ = ["Linear", "Q_FACTOR", "ev100_luminance", "saturation_luminance"]

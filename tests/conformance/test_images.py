@@ -116,6 +116,11 @@ one of them is fixed so that the entry is removed."""
 def test_hard_families(name, dtype):
     case = CASES[name]
     cases = families(dtype)
+    if not case.jit:
+        # NumPy-side cases run frame by frame: the two ends of the scale sweep only (its
+        # middle is covered by every traced case), so the suite stays within CI's time
+        sweep = [k for k in cases if k.startswith("scale_")]
+        cases = {k: v for k, v in cases.items() if k not in sweep[1:-1]}
     batch = np.stack(list(cases.values()))
     with enable_x64(dtype == np.float64):
         outs = _run(case, batch)
