@@ -32,7 +32,8 @@ Policies the generic tests check (the numeric contract every module docstring st
 Bad input (``test_bad_input.py``, policy in ``hdrjax/_check.py``): every case is fed each
 form of :data:`BAD_INPUTS` (wrong rank, wrong channel count, integer/bool/complex dtype, no
 rows or no columns) and must raise a one-line ``ValueError`` naming the argument and the
-expected form — unless the case declares the form in ``accepts`` with its reason and a reference for the result.
+expected form — unless the case declares the form in ``accepts`` with its reason and a
+reference for the result.
 Integer and bool images are promoted to float by policy (:data:`PROMOTED`): the result must
 equal the result for the same values as float32. ``params`` lists out-of-range parameters
 (argument name, call) that must raise a ``ValueError`` naming that argument.
