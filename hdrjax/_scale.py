@@ -93,20 +93,33 @@ def at_scale(f, x: Array, c: Array) -> Array:
     ``1/c`` (up to ``2^64`` in float32) through ``f`` at values up to ``2^64``: the products
     overflow in the backward pass (NaN image gradients) although the gradient is
     representable. ``c = 1`` gives the unscaled values (multiplications by 1 are exact).
+
+    A finite result whose unscaled value lies beyond the float range (an effect that
+    brightens a pixel at the float maximum, or the round-off of a colour matrix and its
+    inverse there) saturates at ``±finfo.max`` instead of becoming ``±Inf``, with
+    derivative 0; non-finite results of ``f`` pass through.
     """
     return _at_scale(f, x, jax.lax.stop_gradient(c))
 
 
+def _unscale(y: Array, c: Array) -> tuple[Array, Array]:
+    """``(y / c`` saturated at ``±finfo.max`` where ``y`` is finite, the saturated mask)``."""
+    out = y / c
+    sat = jnp.isfinite(y) & jnp.isinf(out)
+    return jnp.where(sat, jnp.sign(y) * jnp.finfo(y.dtype).max, out), sat
+
+
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
 def _at_scale(f, x, c):
-    return f(x * c, c) / c
+    return _unscale(f(x * c, c), c)[0]
 
 
 @_at_scale.defjvp
 def _at_scale_jvp(f, primals, tangents):
     (x, c), (tx, _) = primals, tangents
     out, t = jax.jvp(lambda z: f(z, c), (x * c,), (tx,))
-    return out / c, t
+    out, sat = _unscale(out, c)
+    return out, jnp.where(sat, 0.0, t)
 
 
 __all__ = ["at_scale", "divide", "inverse_pow2", "quotient", "scale"]

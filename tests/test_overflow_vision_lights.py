@@ -4,10 +4,11 @@ result is representable (or, for a contrast scale above 1, saturates). 8×8 imag
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import hdrjax.vision as hv
 
-from .conftest import RTOL32
+from .conftest import RTOL32, enable_x64
 from .operators.cases import natural
 
 MAX32 = float(np.finfo(np.float32).max)
@@ -35,6 +36,38 @@ def test_blue_shift_of_a_lamp_near_the_float_maximum():
     others = np.delete(out.reshape(2, 64, 3), 5 * 8 + 7, axis=1)
     np.testing.assert_array_equal(others[0], others[1])
     np.testing.assert_allclose(out[0, 5, 7], img[5, 7], rtol=1e-3)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_blue_shift_of_a_pixel_at_the_float_maximum(dtype):
+    """RGB = (max, max, max): the colour matrix and its inverse round the pixel past the
+    float maximum (+Inf in two channels before). Above 4 cd/m² the pixel keeps its colour:
+    it comes out at the maximum, within round-off; the other pixels keep their bits."""
+    top = np.finfo(dtype).max
+    img = natural((8, 8)).astype(dtype)
+    lamp = img.copy()
+    lamp[2, 3] = top
+    with enable_x64(dtype == np.float64):
+        out = np.asarray(hv.blue_shift(jnp.asarray(np.stack([img, lamp]))))
+    assert out.dtype == dtype
+    assert np.all(np.isfinite(out))
+    np.testing.assert_allclose(out[1, 2, 3], top, rtol=1e-6)
+    others = np.delete(out.reshape(2, 64, 3), 2 * 8 + 3, axis=1)
+    np.testing.assert_array_equal(others[1], others[0])
+
+
+def test_simulate_scale_saturates_at_the_float_maximum():
+    """``scale=`` (cd/m² per stored unit) takes stored values near the float maximum past
+    it: they saturate (+Inf before, and the effects' outputs then non-finite); the other
+    values are exactly ``x · scale``."""
+    img = natural((8, 8))
+    img[3, 4] = MAX32
+    img[5, 1] = (1e36, 3e35, 2e38)
+    out = np.asarray(hv.simulate(img, 30.0, "none", scale=100.0)[0])
+    over = img.astype(np.float64) * 100.0 > MAX32
+    assert over.sum() == 4
+    np.testing.assert_array_equal(out[over], MAX32)
+    np.testing.assert_array_equal(out[~over], img[~over] * np.float32(100.0))
 
 
 def test_contrast_saturates_at_the_float_maximum():

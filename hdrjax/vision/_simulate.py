@@ -324,7 +324,19 @@ def absolute_rgb(
         rgb, factor = image, float(scale)
     rgb = check_rgb(rgb, "image", image=True)
     ch = _chroma_key(chromaticities)
-    return (rgb if factor == 1.0 else rgb * factor), ch
+    if factor == 1.0:
+        return rgb, ch
+    return _to_cd(rgb, jnp.asarray(factor, rgb.dtype)), ch
+
+
+@jax.jit
+def _to_cd(rgb: Array, factor: Array) -> Array:
+    """``rgb · factor``; finite values the factor takes past the float range saturate at
+    the largest float (a stored 3.4e38 in W/sr/m² is beyond float32 in cd/m²), so finite
+    pixels stay finite. One fused step; the other values keep their bits."""
+    top = jnp.finfo(rgb.dtype).max
+    y = rgb * factor
+    return jnp.where(jnp.isfinite(rgb), jnp.clip(y, -top, top), y)
 
 
 def analyze(

@@ -78,9 +78,6 @@ def _expected_dtype(dtype):
     return np.float64 if dtype == np.float64 else np.float32
 
 
-_MAX = ("flat_max", "one_max")
-_TOP32 = ("scale_3.4e+38", "flat_max", "one_max", "one_huge")
-_TOP64 = ("scale_1.8e+308", "flat_max", "one_max", "one_huge")
 KNOWN_OPEN = {
     # issue 16.3, still open: the luminance of a pixel at the float maximum in every
     # channel rounds past the largest float (+Inf), so these statistics see no finite light
@@ -94,15 +91,6 @@ KNOWN_OPEN = {
     ("panorama.fisheye_to_equirect", "float64"): ("flat_max",),
     ("panorama.polar_to_cartesian", "float64"): ("flat_max",),
     ("vision.veil", "float64"): ("flat_max",),
-    # the vision cases at the float maximum in cd/m² (Jensen's and pcond's colour steps)
-    ("vision.blue_shift", "float32"): _TOP32,
-    ("vision.blue_shift", "float64"): _TOP64,
-    ("vision.HumanVision[blue_shift]", "float32"): _MAX,
-    ("vision.HumanVision[blue_shift]", "float64"): _MAX,
-    **{
-        (f"vision.simulate[{e}]", "float32"): _TOP32
-        for e in ("acuity", "blue_shift", "colour_loss", "contrast", "glare")
-    },
 }
 """(case, dtype) → families whose non-finite outputs are known defects not fixed yet: the
 test reports them as xfailed (never as passed), fails on any other family, and fails when
