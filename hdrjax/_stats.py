@@ -317,11 +317,12 @@ def _histogram_percentiles(
 ) -> tuple[Array, Array]:
     """Percentiles from the fixed-grid histogram (``mantissa_bits(bins)``) of the pixels
     ``valid`` (default: all; only finite ones ``≥ tiny`` count); ``n`` is their number and
-    ``lo``/``hi`` the ``ln`` of their extrema, which clip the result (module docstring)."""
+    ``lo``/``hi`` their extrema, which clip the result (module docstring). The extrema
+    themselves, not their logarithms: ``exp(ln max)`` of the largest float rounds to +Inf."""
     m = mantissa_bits(bins)
     counts = _histogram(L, valid, m)
-    mn = jnp.exp(jnp.where(n > 0, lo, 0.0))
-    mx = jnp.exp(jnp.where(n > 0, hi, 0.0))
+    mn = jnp.where(n > 0, lo, 1.0)
+    mx = jnp.where(n > 0, hi, 1.0)
     vals = _from_counts(counts, qs, mn, mx, m)[0]
     err = jnp.asarray(rel_error_bound(m, L.dtype), L.dtype)
     return jnp.where(n > 0, vals, jnp.nan), jnp.where(n > 0, err, 0.0)
@@ -413,7 +414,7 @@ def percentile(
         vals = jnp.nanquantile(jnp.where(valid, L, jnp.nan).reshape(-1), qs)
         return jnp.where(n > 0, vals, jnp.nan), jnp.zeros((), L.dtype)
     _, n, mn, mx = _positive_range(L, mask)
-    return _histogram_percentiles(L, mask, n, jnp.log(mn), jnp.log(mx), qs, int(bins))
+    return _histogram_percentiles(L, mask, n, mn, mx, qs, int(bins))
 
 
 def _extrema_and_sums(L: Array, assume_finite: bool, delta: float):

@@ -31,7 +31,7 @@ from jaxtyping import Array, ArrayLike, Float
 from . import _check
 from ._colour import REC709_WEIGHTS
 from ._stats import DEFAULT_BINS, DEFAULT_DELTA
-from .display._desaturate import PERCENT_ABOVE, THRESHOLD_FACTOR, highlight_threshold
+from .display._desaturate import PERCENT_ABOVE, THRESHOLD_FACTOR, threshold_and_l90
 from .operators._base import as_float_image, count_valid, dispatch, stats_of
 from .operators._reinhard2002 import jgt_key as _jgt_key, jgt_white_terms
 from .operators._tumblin import STEVENS_EPS, adaptation_terms
@@ -246,15 +246,16 @@ def desaturation_threshold(
     (:func:`hdrjax.display.highlight_threshold`, used by
     :func:`hdrjax.display.desaturate_highlights` when ``threshold=None``), in image units.
 
-    ``L₉₀`` is the luminance that only 10 % of the finite pixels exceed.
+    ``L₉₀`` is the luminance that only 10 % of the finite pixels exceed; ``T`` is at most
+    the largest finite float of the image's dtype (where ``L₉₀`` exceeds half of it).
 
     Statistics: ``L90``, its ``rel_error_bound`` (0 for ``method="exact"``),
     ``percent_above`` (10) and ``factor`` (2).
     """
     x = _image(image)
-    T, err = highlight_threshold(x, weights=_weights(weights), method=method, bins=bins)
+    T, L90, err = threshold_and_l90(x, weights=_weights(weights), method=method, bins=bins)
     stats = {
-        "L90": T / THRESHOLD_FACTOR,
+        "L90": L90,
         "rel_error_bound": err,
         "percent_above": jnp.asarray(PERCENT_ABOVE, x.dtype),
         "factor": jnp.asarray(THRESHOLD_FACTOR, x.dtype),

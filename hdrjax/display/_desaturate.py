@@ -16,6 +16,8 @@ luminance that only 10 % of the image's finite pixels exceed. It comes from
 :func:`hdrjax.stats.percentile`'s fixed-grid histogram (relative error at most
 ``rel_error_bound``, returned by :func:`highlight_threshold`: ``2^-10`` = 0.098 % with the
 default 8192 bins, whatever the dynamic range) or, with ``method="exact"``, from a sort.
+``T`` is at most the dtype's largest finite float (``L₉₀`` above half of it would double
+past it), which is still at or above every finite pixel.
 Manual mode takes ``T`` directly.
 
 Why before tone mapping (the default): the threshold and ``L_max`` are statistics of the
@@ -95,21 +97,28 @@ def _rank_q(n_finite: Array, n_pos: Array, dtype) -> tuple[Array, Array]:
     return rank_pos, q
 
 
-def _threshold_one(L: Array, finite: Array | None, method: str, bins: int) -> tuple[Array, Array]:
-    """2 × the luminance exceeded by 10 % of the finite pixels of one image (``finite``:
-    their mask, ``None`` when every pixel is)."""
+def _threshold_of(L90: Array) -> Array:
+    """``T = 2 · L₉₀``, at most the largest finite float: a threshold past it is still at or
+    above every finite luminance (nothing is desaturated either way), and stays finite."""
+    return jnp.minimum(THRESHOLD_FACTOR * L90, jnp.finfo(L90.dtype).max)
+
+
+def _threshold_one(
+    L: Array, finite: Array | None, method: str, bins: int
+) -> tuple[Array, Array, Array]:
+    """``(T, L₉₀, rel_error_bound)``: ``L₉₀`` the luminance exceeded by 10 % of the finite
+    pixels of one image (``finite``: their mask, ``None`` when every pixel is)."""
     # finite is None: the clean branch of _clean_or_masked, every pixel is finite
     n_finite, n_pos, lo, hi = _positive_range(L, finite, known_finite=finite is None)
     rank_pos, q = _rank_q(n_finite, n_pos, L.dtype)
     if method == "exact":
         value, err = percentile(L, 100.0 * q, method="exact", where=finite)
     else:
-        lnlo, lnhi = jnp.log(lo), jnp.log(hi)
-        value, err = _histogram_percentiles(L, finite, n_pos, lnlo, lnhi, q[None], bins)
+        value, err = _histogram_percentiles(L, finite, n_pos, lo, hi, q[None], bins)
         value = value[0]
     # the 90th percentile lies among the non-positive pixels: the threshold is 0
     value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
-    return THRESHOLD_FACTOR * value, err
+    return _threshold_of(value), value, err
 
 
 def _one_pass_threshold(L: Array, bins: int) -> tuple[Array, Array, Array]:
@@ -125,7 +134,7 @@ def _one_pass_threshold(L: Array, bins: int) -> tuple[Array, Array, Array]:
     lo = jnp.where(n_pos > 0, minpos, 1.0)
     value = _from_counts(counts, q[None], lo, jnp.maximum(hi, lo), m)[0][0]
     value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
-    return jnp.isfinite(f), THRESHOLD_FACTOR * value, lmax
+    return jnp.isfinite(f), _threshold_of(value), lmax
 
 
 def highlight_threshold(
@@ -146,8 +155,24 @@ def highlight_threshold(
 
     Returns:
         ``(threshold, rel_error_bound)`` per image, in the image's luminance units; the bound
-        is on the relative error of ``L₉₀`` (0 for ``"exact"``).
+        is on the relative error of ``L₉₀`` (0 for ``"exact"``). A threshold past the largest
+        finite float (``L₉₀`` above half of it) is that float: still at or above every
+        pixel, so nothing is desaturated.
     """
+    T, _, err = threshold_and_l90(rgb, weights=weights, method=method, bins=bins)
+    return T, err
+
+
+def threshold_and_l90(
+    rgb: Float[ArrayLike, "*batch H W 3"],
+    *,
+    weights: Sequence[float] | None = None,
+    method: Literal["histogram", "exact"] = "histogram",
+    bins: int = DEFAULT_BINS,
+) -> tuple[Float[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"]]:
+    """``(threshold, L₉₀, rel_error_bound)``: :func:`highlight_threshold` and the
+    percentile it doubles (``hdrjax.estimate`` reports both; ``T / 2`` is not ``L₉₀`` where
+    the threshold is clamped to the largest float)."""
     x = as_float_image(rgb)
     _check_method(method, bins)
     w = None if weights is None else tuple(float(v) for v in weights)

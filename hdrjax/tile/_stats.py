@@ -24,6 +24,7 @@ import numpy as np
 from jax import Array
 
 from .._colour import REC709_WEIGHTS, luminance
+from .._scale import ln_max
 from .._stats import (
     DEFAULT_BINS,
     DEFAULT_DELTA,
@@ -96,7 +97,8 @@ def _percentiles(counts, minpos, lmax, n_pos, *, m):
     vals, n_kept, kept_sum = _from_counts(counts, qs, minpos, mx, m)
     vals = jnp.where(any_pos, vals, 1.0)
     err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
-    trimmed = jnp.exp(kept_sum / jnp.maximum(n_kept, 1e-30))
+    # clamped as measure clamps: exp of a rounded mean of logarithms may pass the largest float
+    trimmed = jnp.exp(jnp.minimum(kept_sum / jnp.maximum(n_kept, 1e-30), ln_max(dt)))
     return vals, err, jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
 
 
@@ -159,7 +161,7 @@ def measure_blocks(
         min=jnp.asarray(lmin, dt),
         min_positive=jnp.asarray(minpos, dt),
         max=jnp.asarray(lmax, dt),
-        log_average=jnp.asarray(np.exp(log_sum / max(n_fin, 1)), dt),
+        log_average=jnp.asarray(np.exp(min(log_sum / max(n_fin, 1), ln_max(dt))), dt),
         p01=p01,
         p99=p99,
         log_average_trimmed=trimmed,

@@ -79,14 +79,6 @@ def _expected_dtype(dtype):
 
 
 KNOWN_OPEN = {
-    # issue 16.3, still open: the luminance of a pixel at the float maximum in every
-    # channel rounds past the largest float (+Inf), so these statistics see no finite light
-    ("estimate.desaturation_threshold", "float32"): ("flat_max",),
-    ("estimate.desaturation_threshold", "float64"): ("flat_max",),
-    ("highlight_threshold", "float32"): ("flat_max",),
-    ("highlight_threshold", "float64"): ("flat_max",),
-    ("stats.percentile", "float32"): ("flat_max",),
-    ("tile.statistics", "float32"): ("flat_max",),
     # bilinear weights times the float64 maximum round past it
     ("panorama.fisheye_to_equirect", "float64"): ("flat_max",),
     ("panorama.polar_to_cartesian", "float64"): ("flat_max",),

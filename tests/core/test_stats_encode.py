@@ -44,6 +44,22 @@ def test_percentiles_skip_bad_and_non_positive_values():
     assert np.isnan(np.asarray(empty)).all()
 
 
+def test_percentiles_at_the_float_maximum():
+    """Pixels at float32's largest value: every percentile is that value (the histogram
+    path took the logarithm of the extrema and back: exp(ln max) rounds to +Inf, NaN out)."""
+    big = np.finfo(np.float32).max
+    # the shapes of the test above: its compiled steps are reused
+    L = np.full(10, big, np.float32)
+    L[:2] = 1.0
+    q = np.array([0.0, 50.0, 100.0])
+    vals, err = percentile(L, q)  # within the stated bound, finite
+    np.testing.assert_allclose(vals, [1.0, big, big], rtol=float(err))
+    assert np.all(np.asarray(vals) <= big)
+    # a constant image: min = max = the float maximum, exact
+    const, _ = percentile(np.full(10, big, np.float32), q)
+    np.testing.assert_array_equal(const, [big, big, big])
+
+
 def test_measure_against_numpy(x64):
     rng = np.random.default_rng(2)
     L = rng.lognormal(0, 2, (64, 64))

@@ -86,6 +86,17 @@ def test_automatic_threshold_counts_dark_and_zero_pixels():
     assert float(T) == 0.0
 
 
+def test_threshold_of_images_at_the_float_maximum_is_the_float_maximum():
+    """``2 · L₉₀`` past the largest float (it was +Inf, or NaN from the percentile of an
+    image at the maximum) is clamped to it: finite, and still at or above every pixel's
+    luminance, so nothing changes, as with any ``T ≥ L_max``."""
+    big = np.finfo(np.float32).max
+    batch = np.stack([np.full((8, 8, 3), big), np.full((8, 8, 3), 0.75 * big)]).astype(np.float32)
+    for method in ("histogram", "exact"):
+        T, _ = highlight_threshold(batch, method=method)
+        np.testing.assert_array_equal(T, [big, big], err_msg=method)
+
+
 def test_non_finite_pixels_pass_through_and_do_not_spread():
     rgb = _hdr((20, 24, 3), seed=3)
     rgb[2, 3] = [np.nan, 1.0, 1.0]

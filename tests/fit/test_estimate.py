@@ -178,6 +178,18 @@ def test_desaturation_threshold_is_twice_the_90th_percentile(images, name):
     assert s[k] * (1 - b) <= float(fast.statistics["L90"]) <= s[k + 1] * (1 + b)
 
 
+def test_desaturation_threshold_at_the_float_maximum():
+    """``T = 2 · L₉₀`` is clamped to the largest float; ``L90`` is the percentile itself
+    (it was reported as ``T / 2``, +Inf for these images)."""
+    big = np.finfo(np.float32).max
+    for level in (1.0, 0.75):
+        est = E.desaturation_threshold(np.full((8, 8, 3), level * big, np.float32))
+        assert float(est.value) == big
+        L90, err = float(est.statistics["L90"]), float(est.statistics["rel_error_bound"])
+        np.testing.assert_allclose(L90, level * big, rtol=err)
+        assert L90 <= big
+
+
 def test_nan_pixels_are_left_out_like_the_operators(images, x64):
     rgb = images["cornell"].copy()
     rgb[3, 4] = np.nan

@@ -103,6 +103,20 @@ def test_no_positive_pixels_equal_measure():
     np.testing.assert_allclose(got.log_average, 1e-6, rtol=1e-6)
 
 
+def test_image_at_the_float_maximum_equals_measure():
+    """Every pixel at float32's largest value: the log-averages are clamped below it as
+    ``measure`` clamps them (``exp`` of the rounded mean of logarithms was +Inf)."""
+    big = np.finfo(np.float32).max
+    L = np.full((8, 8), big, np.float32)
+    ref, got = measure(L), T.statistics(L, tile=4)
+    for name in EXACT + ("p01", "p99", "rel_error_bound"):
+        assert np.asarray(getattr(got, name)) == np.asarray(getattr(ref, name)), name
+    for name in ("log_average", "log_average_trimmed"):
+        np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=LOGAVG_RTOL)
+        np.testing.assert_allclose(getattr(got, name), big, rtol=1e-4)
+    assert float(got.p99) == big
+
+
 def test_luminance_of_one_channel_image():
     x = crop(40, 30, bad=False)
     L = np.asarray(luminance(x))
