@@ -34,6 +34,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._interp import lerp
 
 
 @functools.partial(jax.jit, static_argnames=("wrap_x",))
@@ -77,15 +78,11 @@ def sample_bilinear(
         fx = jnp.where((xc > w - 1.0)[..., None], 1.0, fx)
         x0 = jnp.clip(x0, 0, w - 1)
         x1 = jnp.clip(x1, 0, w - 1)
-    top = _lerp(img[y0, x0], img[y0, x1], fx)
-    bottom = _lerp(img[y1, x0], img[y1, x1], fx)
-    return _lerp(top, bottom, fy)
-
-
-def _lerp(a: Array, b: Array, f: Array) -> Array:
-    """``a (1 - f) + b f``, exactly ``a`` at ``f = 0`` and ``b`` at ``f = 1``: a NaN/Inf
-    neighbour with zero weight does not reach the sample (``0 · NaN`` would)."""
-    return jnp.where(f == 0, a, jnp.where(f == 1, b, a * (1 - f) + b * f))
+    # each blend stays between its two neighbours (no +Inf from neighbours at the float
+    # maximum; a NaN/Inf neighbour with zero weight does not reach the sample)
+    top = lerp(img[y0, x0], img[y0, x1], fx)
+    bottom = lerp(img[y1, x0], img[y1, x1], fx)
+    return lerp(top, bottom, fy)
 
 
 def _centres(n: int) -> Array:
@@ -198,9 +195,9 @@ def cubemap_to_equirect(faces: Float[ArrayLike, "6 S S C"], height: int) -> Floa
     y1 = jnp.minimum(y0 + 1, size - 1)
     wx = (fx - x0)[..., None]
     wy = (fy - y0)[..., None]
-    top = faces[face, y0, x0] * (1 - wx) + faces[face, y0, x1] * wx
-    bottom = faces[face, y1, x0] * (1 - wx) + faces[face, y1, x1] * wx
-    return top * (1 - wy) + bottom * wy
+    top = lerp(faces[face, y0, x0], faces[face, y0, x1], wx)
+    bottom = lerp(faces[face, y1, x0], faces[face, y1, x1], wx)
+    return lerp(top, bottom, wy)
 
 
 @functools.partial(jax.jit, static_argnames=("height", "width", "fov_deg"))

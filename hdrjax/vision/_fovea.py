@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._interp import lerp
 from .._stats import accurate_sum
 from ._photometry import LMAX, LMIN
 
@@ -127,6 +128,7 @@ def upsample(a: Array, factor: tuple[int, int], shape: tuple[int, int]) -> Array
     Output sample ``i`` sits at input coordinate ``(i + 0.5)/f - 0.5`` (centre-aligned, as
     pcond's ``addveil``/``acuscan``); beyond the first/last input sample the edge value is
     held (pcond extrapolates; holding keeps a veil or a blur weight from turning negative).
+    Each value lies between the two it blends, up to the float maximum (:func:`lerp`).
     """
     out = a
     for axis, (f, n_out) in enumerate(zip(factor, shape, strict=True)):
@@ -136,7 +138,7 @@ def upsample(a: Array, factor: tuple[int, int], shape: tuple[int, int]) -> Array
         wshape = [1] * out.ndim
         wshape[axis] = int(n_out)
         wj = jnp.asarray(w, out.dtype).reshape(wshape)
-        out = jnp.take(out, i0, axis=axis) * (1.0 - wj) + jnp.take(out, i1, axis=axis) * wj
+        out = lerp(jnp.take(out, i0, axis=axis), jnp.take(out, i1, axis=axis), wj)
     return out
 
 

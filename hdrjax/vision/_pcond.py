@@ -18,6 +18,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from .._interp import lerp
 from .._scale import at_scale
 from . import _fft
 from ._ferwerda1996 import _log10_safe
@@ -154,7 +155,9 @@ def veil(
 
     For every foveal sample ``i``: ``veil_i = 0.08 Σ_j w_ij L_j / Σ_j w_ij`` over the other
     foveal samples with ``w_ij = 0.5 cosθ_ij/(1 - cosθ_ij)`` (≈ cosθ/θ²); the veil image is
-    bilinearly interpolated to full resolution and ``out = 0.92·RGB + veil`` (per channel).
+    bilinearly interpolated to full resolution and ``out = 0.92·RGB + veil`` (per channel),
+    computed as one blend of RGB and the interpolated weighted mean, which stays between
+    the two up to the float maximum.
     The convolution over the foveal grid is a zero-padded FFT (:func:`veil_kernel`).
 
     Args:
@@ -188,10 +191,15 @@ def _veil(rgb: Array, view: ResolvedView) -> Array:
     # den is a sum of positive weights or (no other sample: a 1-sample grid) FFT round-off;
     # without a surround the sample keeps its own light (pcond would divide by zero).
     okd = den > 1e-6 * float(k.max(initial=0.0))
-    v = jnp.where(okd, VADAPT * num / jnp.where(okd, den, 1.0) / c, VADAPT * fov)
-    v = jnp.where(jnp.min(fov) >= 0, jnp.maximum(v, 0.0), v)  # FFT round-off below 0
-    full = upsample(v, (by, bx), rgb.shape[:2])
-    return restore((1.0 - VADAPT) * x + full, rgb, ok)
+    # the surround's weighted mean: FFT round-off can carry it a few ulps past the samples,
+    # below 0 or (samples at the float maximum) past the maximum, where it saturates
+    m = jnp.where(okd, num / jnp.where(okd, den, 1.0) / c, fov)
+    m = jnp.where(jnp.min(fov) >= 0, jnp.maximum(m, 0.0), m)
+    top = jnp.finfo(m.dtype).max
+    m = jnp.where(jnp.abs(m) > top, jnp.sign(m) * top, m)
+    # 0.92·RGB + 0.08·mean as one blend, which stays between its two values
+    full = upsample(m, (by, bx), rgb.shape[:2])
+    return restore(lerp(x, full, VADAPT), rgb, ok)
 
 
 __all__ = ["VADAPT", "VEIL_RANGE", "acuity", "colour_loss", "mesopic_weight", "tvi", "veil"]

@@ -78,12 +78,7 @@ def _expected_dtype(dtype):
     return np.float64 if dtype == np.float64 else np.float32
 
 
-KNOWN_OPEN = {
-    # bilinear weights times the float64 maximum round past it
-    ("panorama.fisheye_to_equirect", "float64"): ("flat_max",),
-    ("panorama.polar_to_cartesian", "float64"): ("flat_max",),
-    ("vision.veil", "float64"): ("flat_max",),
-}
+KNOWN_OPEN: dict[tuple[str, str], tuple[str, ...]] = {}
 """(case, dtype) → families whose non-finite outputs are known defects not fixed yet: the
 test reports them as xfailed (never as passed), fails on any other family, and fails when
 one of them is fixed so that the entry is removed."""

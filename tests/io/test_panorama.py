@@ -101,3 +101,16 @@ def test_jit_and_grad():
     assert np.isfinite(np.asarray(g)).all() and float(g.sum()) == pytest.approx(
         6 * 16 * 3, rel=1e-5
     )
+
+
+def test_flat_float64_images_resample_to_themselves(x64):
+    """Issue 16.3: float32 sample coordinates with a float64 image rounded ``1 - f`` in
+    float32, so the bilinear weights summed to up to ``1 + 2e-8``: a flat image at the
+    float64 maximum came out +Inf, and a flat image of ones up to 3e-8 off 1."""
+    for v in (np.finfo(np.float64).max, 1.0):
+        img = np.full((8, 8, 3), v)
+        fish = np.asarray(pano.fisheye_to_equirect(img, 8))
+        disc = np.asarray(pano.polar_to_cartesian(img, 8))
+        for out in (fish, disc):  # the view is v, the rest is the fill 0
+            assert out.dtype == np.float64
+            assert np.all((out == v) | (out == 0.0)) and np.any(out == v), (v, out[..., 0])

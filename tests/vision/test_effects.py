@@ -144,6 +144,17 @@ def test_pcond_veil_against_dense_formula():
     np.testing.assert_allclose(out, 0.92 * img + np_upsample(veil, 2, 2, 20, 36), rtol=1e-6)
 
 
+@pytest.mark.usefixtures("x64")
+def test_pcond_veil_of_a_uniform_image_at_the_float64_maximum():
+    """Issue 16.3: FFT round-off put the weighted mean of a uniform image at the float64
+    maximum a few ulps above it, and 0.92·RGB + 0.08·mean rounded past the maximum (+Inf
+    pixels); the veil of a uniform image is the image (a blend stays between its values)."""
+    top = np.finfo(np.float64).max
+    out = np.asarray(hv.veil(np.full((8, 8, 3), top)))
+    assert out.dtype == np.float64
+    np.testing.assert_allclose(out, top, rtol=1e-12)
+
+
 # -- colour ------------------------------------------------------------------------------
 
 

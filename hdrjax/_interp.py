@@ -1,0 +1,36 @@
+"""Linear interpolation shared by the resamplers (panoramas, the vision effects' upsampling).
+
+A blend ``a (1 - f) + b f`` with ``0 ≤ f ≤ 1`` lies between ``a`` and ``b``, but its
+rounded terms can add up past the largest float when both neighbours are near it: a
+float64 image at the float64 maximum, sampled at float32 coordinates, gave +Inf (``1 - f``
+rounded in float32 made the two weights sum to ``1 + 2e-8``). :func:`lerp` forms the
+weights in the samples' precision and keeps a blend that still rounds past the maximum at
+the neighbour it cannot exceed.
+"""
+
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike
+
+
+def lerp(a: Array, b: Array, f: ArrayLike) -> Array:
+    """``a (1 - f) + b f`` for weights ``0 ≤ f ≤ 1``, elementwise (broadcasting).
+
+    - ``f`` is promoted with ``a`` and ``b`` before ``1 - f`` (float32 weights of a float64
+      blend: ``1 - f`` is then exact and the two weights sum to 1);
+    - exactly ``a`` at ``f = 0`` and ``b`` at ``f = 1``: a NaN/Inf neighbour with zero
+      weight does not reach the result (``0 · NaN`` would);
+    - where the rounded blend is ±Inf it is replaced by ``max(a, b)`` (``min(a, b)`` for
+      −Inf): a blend of finite neighbours can only have rounded past the float maximum
+      (its true value is at most ``max(a, b)``), and an infinite neighbour still gives
+      ±Inf; NaN (a NaN neighbour, or +Inf blended with −Inf) stays NaN.
+
+    Finite blends are the formula's values, and their derivatives its derivatives. One
+    fused elementwise step.
+    """
+    f = jnp.asarray(f, jnp.result_type(a, b, f))
+    r = a * (1 - f) + b * f
+    r = jnp.where(jnp.isinf(r), jnp.where(r > 0, jnp.maximum(a, b), jnp.minimum(a, b)), r)
+    return jnp.where(f == 0, a, jnp.where(f == 1, b, r))
+
+
+__all__ = ["lerp"]
