@@ -64,6 +64,16 @@ def real(x: Any, name: str) -> None:
         )
 
 
+def as_float(x: Any) -> jax.Array:
+    """``x`` as a JAX float array in the policy's dtype: floating point kept, float16,
+    bfloat16, integers and bools computed in JAX's default float (float32, float64 under
+    x64). Checks nothing: call :func:`real` first where the dtype comes from the user."""
+    x = jnp.asarray(x)
+    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
+        x = x.astype(jnp.result_type(float))
+    return x
+
+
 def form(channels: int | None = 3, ndim: int | None = None, min_ndim: int = 3) -> str:
     """The expected shape as the messages write it, e.g. ``(..., H, W, 3)``."""
     c = "C" if channels is None else str(channels)
@@ -227,6 +237,7 @@ def one_of(value: Any, name: str, options: Sequence[str]) -> Any:
 
 
 __all__ = [
+    "as_float",
     "cube",
     "dtype_of",
     "form",

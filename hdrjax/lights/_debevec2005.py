@@ -32,8 +32,8 @@ from jaxtyping import Array, ArrayLike, Float
 from .._colour import luminance
 from .._stats import accurate_sum
 from ._geometry import azel_to_direction
-from ._loghin2019 import _flat_float, _image_shape, _weights, _working_rgb, _working_size
 from ._result import MedianCutLights
+from ._working_map import flatten_batch_float, image_shape, weights_key, working_rgb, working_size
 
 SCALE_EXP = 4
 """Energies are summed times ``2^-SCALE_EXP`` (see :func:`_median_cut_one`)."""
@@ -53,7 +53,7 @@ def _median_cut_one(
     weights: tuple[float, float, float] | None,
 ) -> dict[str, Array]:
     H, W = hw
-    rgb_w, _ = _working_rgb(rgb, factor, hw, weights)
+    rgb_w, _ = working_rgb(rgb, factor, hw, weights)
     dt = rgb_w.dtype
     L = jnp.maximum(luminance(rgb_w, weights), 0)
     el = np.pi * (0.5 - (np.arange(H) + 0.5) / H)
@@ -167,7 +167,7 @@ def _median_cut_batch(
     weights: tuple[float, float, float] | None,
     batch: tuple[int, ...],
 ) -> MedianCutLights:
-    x = _flat_float(rgb, batch)
+    x = flatten_batch_float(rgb, batch)
     out = jax.vmap(lambda v: _median_cut_one(v, levels, factor, hw, in_hw, weights))(x)
     out = {k: v.reshape(batch + v.shape[1:]) for k, v in out.items()}
     return MedianCutLights(**out, input_shape=in_hw)
@@ -199,11 +199,11 @@ def median_cut(
     levels = int(n_lights).bit_length() - 1
     if 1 << levels != n_lights:
         raise ValueError(f"n_lights: expected a power of two, got {n_lights!r}")
-    batch, in_h, in_w = _image_shape(envmap, "envmap")
-    factor, h, w = _working_size(in_h, in_w, width)
+    batch, in_h, in_w = image_shape(envmap, "envmap")
+    factor, h, w = working_size(in_h, in_w, width)
     if (1 << levels) > h * w:
         raise ValueError(f"n_lights: {n_lights} regions need at least that many pixels")
-    wts = _weights(weights)
+    wts = weights_key(weights)
     return _median_cut_batch(envmap, levels, factor, (h, w), (in_h, in_w), wts, batch)
 
 

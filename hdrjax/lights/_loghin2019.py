@@ -97,12 +97,19 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
-from .._colour import REC709_WEIGHTS, luminance
+from .._colour import luminance
 from .._scale import inverse_pow2
 from .._stats import accurate_sum
 from ._result import Lights
 from ._sequences import halton_np, sphere_directions_np
+from ._working_map import (
+    flatten_batch,
+    flatten_batch_float,
+    image_shape,
+    weights_key,
+    working_rgb,
+    working_size,
+)
 
 DEFAULT_WIDTH = 512
 """Working width (pixels): see the accuracy/time table in the README (``benchmarks/``)."""
@@ -154,20 +161,6 @@ class _Plan:
     weights: tuple[float, float, float] | None
 
 
-def _working_size(in_h: int, in_w: int, width: int) -> tuple[int, int, int]:
-    """``(factor, h, w)``: reduce by the smallest integer factor that fits ``width``; factor 0
-    means "not a divisor: resample to (h, w)"."""
-    if int(width) != width or width < 4:
-        raise ValueError(f"width: expected an integer >= 4, got {width!r}")
-    if in_w <= width:
-        return 1, in_h, in_w
-    f = -(-in_w // int(width))
-    if in_w % f == 0 and in_h % f == 0:
-        return f, in_h // f, in_w // f
-    w = in_w // f
-    return 0, max(2, round(in_h * w / in_w)), w
-
-
 def _plan(
     sphere: bool,
     in_h: int,
@@ -187,7 +180,7 @@ def _plan(
         raise ValueError(f"max_radius: expected a finite number > 0, got {max_radius!r}")
     if int(max_lights) != max_lights or max_lights < 1:
         raise ValueError(f"max_lights: expected an integer >= 1, got {max_lights!r}")
-    factor, h, w = _working_size(in_h, in_w, width)
+    factor, h, w = working_size(in_h, in_w, width)
     if n_samples is None:
         n = max(64, round(DEFAULT_SAMPLES_PER_PIXEL * w * h))
     else:
@@ -228,21 +221,11 @@ def _plan(
         max_candidates=c,
         max_reps=min(c, 4 * int(max_lights)),
         max_lights=int(max_lights),
-        weights=_weights(weights),
+        weights=weights_key(weights),
     )
 
 
 _cached_plan = functools.lru_cache(maxsize=64)(_plan)
-
-
-def _weights(weights: Sequence[float] | None) -> tuple[float, float, float] | None:
-    """Hashable luminance weights; Rec.709 becomes ``None`` so that both share a compile."""
-    if weights is None:
-        return None
-    w = tuple(float(v) for v in weights)
-    if len(w) != 3 or not all(math.isfinite(v) for v in w):
-        raise ValueError(f"weights: expected three finite numbers, got {weights!r}")
-    return None if w == REC709_WEIGHTS else w
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -363,39 +346,6 @@ def _search_image(pooled: Array, rr: int, sphere: bool) -> tuple[Array, Array]:
 
 
 # ----------------------------------------------------------------------------- image ops
-
-
-def _reduce(rgb: Array, f: int, weights: tuple[float, float, float] | None) -> tuple[Array, Array]:
-    """Clean and box-average ``f × f`` blocks of the input; also each block's peak luminance.
-
-    A pixel with any non-finite channel (its luminance is then non-finite) counts as zero;
-    negative values are clamped to zero. The blocks are summed as slices of a
-    ``(h, f, w·f·3)`` view, which XLA:CPU runs in one pass (a 5-D reshape-and-reduce, or
-    strided slices of the channel axis, ran 3–5x slower).
-    """
-    lum = luminance(rgb, weights)
-    ok = jnp.isfinite(lum)
-    clean = jnp.where(ok[..., None], jnp.maximum(rgb, 0), 0)
-    lum = jnp.where(ok, jnp.maximum(lum, 0), 0)
-    if f == 1:
-        return clean, lum
-    return _block_mean(clean, f), _block_max(lum, f)
-
-
-def _block_mean(x: Array, f: int) -> Array:
-    """Mean of the ``f × f`` blocks of an ``(H, W, 3)`` image (:func:`_reduce`)."""
-    H, W = x.shape[0] // f, x.shape[1] // f
-    x = x.reshape(H, f, W * f * 3)
-    x = sum(x[:, i] for i in range(f)).reshape(H, W, f, 3)
-    return sum(x[:, :, j] for j in range(f)) / (f * f)
-
-
-def _block_max(x: Array, f: int) -> Array:
-    """Maximum of the ``f × f`` blocks of an ``(H, W)`` image."""
-    H, W = x.shape[0] // f, x.shape[1] // f
-    p = x.reshape(H, f, W * f)
-    p = functools.reduce(jnp.maximum, [p[:, i] for i in range(f)]).reshape(H, W, f)
-    return functools.reduce(jnp.maximum, [p[:, :, j] for j in range(f)])
 
 
 def _blur(L: Array, sigma: float, wrap: bool) -> Array:
@@ -605,21 +555,8 @@ def _threshold(top: Array, sample_vals: Array, thr: Array) -> Array:
     return jnp.where(jnp.isnan(thr), auto, user).astype(top.dtype)
 
 
-def _working_rgb(
-    rgb: Array, factor: int, hw: tuple[int, int], weights: tuple[float, float, float] | None
-) -> tuple[Array, Array]:
-    """Step 1: the cleaned map at the working resolution and each pixel's peak luminance
-    (the largest input pixel it covers; the working luminance itself when not reduced by
-    an integer factor)."""
-    if factor >= 1:
-        return _reduce(rgb, factor, weights)
-    small = jax.image.resize(_reduce(rgb, 1, weights)[0], hw + (3,), "linear")
-    small = jnp.maximum(small, 0)
-    return small, jnp.maximum(luminance(small, weights), 0)
-
-
 def _prepare(rgb: Array, plan: _Plan) -> tuple[Array, Array]:
-    return _working_rgb(rgb, plan.factor, (plan.h, plan.w), plan.weights)
+    return working_rgb(rgb, plan.factor, (plan.h, plan.w), plan.weights)
 
 
 def _domega(plan: _Plan) -> np.ndarray:
@@ -1078,38 +1015,9 @@ def _find(
     )
 
 
-def _flat(x: Array, batch: tuple[int, ...]) -> Array:
-    return x.reshape((math.prod(batch),) + x.shape[len(batch) :])
-
-
-def _flat_float(x: Array, batch: tuple[int, ...]) -> Array:
-    """Batch axes flattened into one; float16/integer input computed in the default float."""
-    x = _flat(x, batch)
-    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
-        x = x.astype(jnp.result_type(float))
-    return x
-
-
-def _image_shape(image: ArrayLike, name: str) -> tuple[tuple[int, ...], int, int]:
-    """``(batch, H, W)`` of a ``(..., H, W, 3)`` image; ValueError otherwise."""
-    _check.real(image, name)
-    shape = np.shape(image)
-    if len(shape) < 3 or shape[-1] != 3:
-        raise ValueError(f"{name}: expected channels-last RGB (..., H, W, 3), got shape {shape}")
-    _check.nonempty(shape, name)
-    batch = tuple(int(v) for v in shape[:-3])  # may be empty (0 frames: 0 light sets)
-    h, w = int(shape[-3]), int(shape[-2])
-    if h < 2 or w < 4:
-        raise ValueError(
-            f"{name}: expected at least 2 rows and 4 columns (..., H >= 2, W >= 4, 3),"
-            f" got shape {shape}"
-        )
-    return batch, h, w
-
-
 @functools.partial(jax.jit, static_argnames=("plan", "batch"))
 def _prepare_batch(rgb: Array, plan: _Plan, batch: tuple[int, ...]) -> tuple[Array, Array]:
-    return jax.vmap(lambda v: _prepare(v, plan))(_flat_float(rgb, batch))
+    return jax.vmap(lambda v: _prepare(v, plan))(flatten_batch_float(rgb, batch))
 
 
 @functools.partial(jax.jit, static_argnames=("plan",))
@@ -1125,7 +1033,7 @@ def _find_batch(
     plan: _Plan,
     batch: tuple[int, ...],
 ) -> Lights:
-    thr = _flat(jnp.asarray(thr, prepared[0].dtype), batch)
+    thr = flatten_batch(jnp.asarray(thr, prepared[0].dtype), batch)
     if math.prod(batch) == 1:  # no vmap: lets _find branch on the data
         first = jax.tree.map(lambda v: v[0], (prepared, smooth, thr))
         out = jax.tree.map(lambda v: v[None], _find(*first[0], first[1], first[2], plan, True))
@@ -1147,7 +1055,7 @@ def _run(
     threshold: float | ArrayLike | None,
     **options: Any,
 ) -> Lights:
-    batch, in_h, in_w = _image_shape(image, name)
+    batch, in_h, in_w = image_shape(image, name)
     if options.get("weights") is not None:
         options["weights"] = tuple(float(v) for v in options["weights"])
     plan = _cached_plan(sphere, in_h, in_w, **options)
