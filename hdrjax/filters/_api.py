@@ -8,25 +8,13 @@ import jax.numpy as jnp
 from jax import Array
 
 from .. import _check
-
-# AVX-512 machines run the integer networks twice as wide with 512-bit vectors; XLA's
-# default prefers 256. Region analysis in copy insertion drops the copies XLA otherwise
-# makes of the strip loops' carried buffers in every iteration (the median's loop had 4;
-# 5×5 median at 4096²: ~85 → ~75 ms of CPU time). Applied to hdrjax's own jit only (inside
-# a caller's jit the caller's settings win); harmless on CPUs without AVX-512.
-_CPU_OPTIONS = {
-    "xla_cpu_prefer_vector_width": 512,
-    "xla_cpu_copy_insertion_use_region_analysis": True,
-}
+from ._xla_options import CPU_COMPILER_OPTIONS
 
 
 def float_image(image) -> Array:
     """The image as a float32 array (float64 when x64 is on and the input is float64)."""
     _check.real(image, "image")
-    x = jnp.asarray(image)
-    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
-        x = x.astype(jnp.result_type(float))
-    return x
+    return _check.as_float(image)
 
 
 def check_size(size) -> int:
@@ -61,8 +49,10 @@ def check_layout(x: Array, channel_axis: int | None) -> None:
 
 @functools.cache
 def compiled(fn: Callable, static: tuple[str, ...], options: bool) -> Callable:
-    """``jax.jit(fn)``, with hdrjax's CPU compiler options when ``options``."""
-    return jax.jit(fn, static_argnames=static, compiler_options=_CPU_OPTIONS if options else None)
+    """``jax.jit(fn)``, with hdrjax's CPU compiler options (:mod:`._xla_options`) when
+    ``options``."""
+    opts = CPU_COMPILER_OPTIONS if options else None
+    return jax.jit(fn, static_argnames=static, compiler_options=opts)
 
 
 def call(fn: Callable, static: tuple[str, ...], *args, **kwargs):
