@@ -422,3 +422,29 @@ def test_batched_and_vmapped_medians_of_strip_sized_images_equal_a_loop(criterio
     ref = ndi.median_filter(x[0, ..., 1], size=5, mode="nearest")
     if criterion == "channels":
         np.testing.assert_array_equal(loop[0, ..., 1], ref)
+
+
+def test_xla_compiler_options_are_still_accepted(monkeypatch):
+    # The filters compile with XLA flags by name (hdrjax/filters/_xla_options.py; JAX has no
+    # public API for them). XLA rejects a name it no longer knows, so an upgrade that drops
+    # or renames one fails here, naming it, rather than in every filter call.
+    from hdrjax.filters import _api
+    from hdrjax.filters._xla_options import CPU_COMPILER_OPTIONS
+
+    x = jnp.arange(6.0).reshape(2, 3)
+    want = 2 * np.arange(6.0).reshape(2, 3) + 1
+    for name, value in CPU_COMPILER_OPTIONS.items():
+        out = jax.jit(lambda v: v * 2.0 + 1.0, compiler_options={name: value})(x)
+        np.testing.assert_array_equal(np.asarray(out), want, err_msg=name)
+    # the check means something: an unknown name is an error, not ignored; and the filters
+    # compile with the options of that one place (on the CPU, at top level)
+    if jax.default_backend() != "cpu":
+        return
+    bogus = {**CPU_COMPILER_OPTIONS, "xla_cpu_no_such_option": 1}
+    monkeypatch.setattr(_api, "CPU_COMPILER_OPTIONS", bogus)
+    _api.compiled.cache_clear()
+    try:
+        with pytest.raises(jax.errors.JaxRuntimeError, match="No such compile option"):
+            mean_filter(np.ones((8, 8, 3), np.float32), 3)
+    finally:
+        _api.compiled.cache_clear()
