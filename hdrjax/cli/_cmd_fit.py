@@ -297,7 +297,6 @@ def run(args: argparse.Namespace) -> int:
     import optimistix as optx
 
     from .. import fit as hfit
-    from ..operators._base import _apply_jit
 
     target, labels = build_target(parsed, args, rgb.shape[:2], img.luminance_weights, max_size)
     x = jnp.asarray(rgb)
@@ -344,7 +343,7 @@ def run(args: argparse.Namespace) -> int:
     if not ok and not args.force:
         print(f"not written: {args.output} (the fit did not converge; --force writes it)")
         return EXIT_NOT_CONVERGED
-    display = _apply_jit(res.operator, x)
+    display = res.operator(x)
     if not any(kind == "reference" for kind, _, _ in parsed):
         full = np.asarray(target.statistics(display))
         print(

@@ -236,12 +236,10 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from ..operators._base import _apply_jit
-
     op = with_file_weights(op, img)
     t1 = time.perf_counter()
     measured = eqx_jit_measure(op, rgb)
-    out = encode_output(args, _apply_jit(measured, rgb))
+    out = encode_output(args, measured(rgb))
     t_map = time.perf_counter() - t1
     n_bad = int(np.count_nonzero(~np.all(np.isfinite(rgb), axis=-1)))
     t2 = time.perf_counter()

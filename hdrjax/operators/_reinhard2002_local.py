@@ -51,7 +51,9 @@ def erf_kernel_1d(s: float, radius: int, dtype) -> Array:
     return jax.scipy.special.erf(c * (x + 0.5)) - jax.scipy.special.erf(c * (x - 0.5))
 
 
-def _radius(s: float) -> int:
+def gaussian_radius(s: float) -> int:
+    """Half-width in pixels of :func:`gaussian_stack`'s kernel of scale ``s`` (also the
+    halo a tile needs around it)."""
     return max(1, math.ceil(4.0 * ALPHA1 * s))  # exp(-16): < 1e-7 of the peak
 
 
@@ -61,14 +63,14 @@ def gaussian_stack(L: Array, valid: Array, ss: list[float]) -> Array:
     Returns ``(len(ss), H, W)``. Zero padding by the largest radius, so no wrap-around.
     """
     H, W = L.shape
-    r = _radius(max(ss))
+    r = gaussian_radius(max(ss))
     Hp, Wp = H + 2 * r, W + 2 * r
     v = valid.astype(L.dtype)
     f_img = jnp.fft.rfft2(jnp.pad(L * v, r), s=(Hp, Wp))
     f_msk = jnp.fft.rfft2(jnp.pad(v, r), s=(Hp, Wp))
     out = []
     for s in ss:
-        rs = _radius(s)
+        rs = gaussian_radius(s)
         k = erf_kernel_1d(s, rs, L.dtype)
         k2 = jnp.outer(k, k) / 4.0
         kp = jnp.zeros((Hp, Wp), L.dtype).at[: 2 * rs + 1, : 2 * rs + 1].set(k2)
@@ -225,4 +227,10 @@ class Reinhard2002Auto(AbstractOperator):
         )
 
 
-__all__ = ["Reinhard2002Auto", "Reinhard2002Local", "local_adaptation", "scales"]
+__all__ = [
+    "Reinhard2002Auto",
+    "Reinhard2002Local",
+    "gaussian_radius",
+    "local_adaptation",
+    "scales",
+]

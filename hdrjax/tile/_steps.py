@@ -22,9 +22,9 @@ from .. import _check
 from .._stats import LuminanceStats
 from ..filters import mean_filter, median_filter
 from ..filters._api import check_passes, check_size
-from ..operators._base import AbstractLuminanceCurve, AbstractOperator, _apply_jit
+from ..operators._base import AbstractLuminanceCurve, AbstractOperator
 from ..operators._reinhard2002 import Reinhard2002, jgt_key, jgt_white
-from ..operators._reinhard2002_local import Reinhard2002Local, _radius, scales
+from ..operators._reinhard2002_local import Reinhard2002Local, gaussian_radius, scales
 from ..vision._fft import fft_size, kernel_spectrum
 from ..vision._spencer1995 import Variant, apply_glare, glare_kernel, kernel_radius
 from ..vision._view import ResolvedView, View, resolve_view
@@ -207,7 +207,7 @@ class Tonemap(AbstractStep):
         _check.shape(jax.ShapeDtypeStruct(tuple(shape), jnp.float32), "image", ndim=3)
         op = self.operator
         if isinstance(op, Reinhard2002Local):
-            r = _radius(max(scales(op.s_low, op.s_high, op.num)))
+            r = gaussian_radius(max(scales(op.s_low, op.s_high, op.num)))
             return r, r
         return 0, 0
 
@@ -216,7 +216,7 @@ class Tonemap(AbstractStep):
         return Tonemap(_bind_reinhard(self.operator, stats))
 
     def __call__(self, window):
-        return _apply_jit(self.operator, jnp.asarray(window))
+        return self.operator(jnp.asarray(window))
 
 
 @functools.lru_cache(maxsize=16)
