@@ -341,41 +341,17 @@ def _default_solver(rtol: float, atol: float) -> optx.LevenbergMarquardt:
     return eqx.tree_at(lambda s: s.search, solver, search)
 
 
-_NEEDS_UNSET: dict[Any, bool] = {}
-
-
 def _output_needs_unset(op: AbstractOperator) -> bool:
-    """Whether ``op``'s output depends on any of its unset parameters once they are set,
-    e.g. False for ``tumblin_reinhard`` with ``L_wa`` and ``L_white`` given: its ``L_max``
-    only serves to derive ``L_white``. Then the fit need not measure them (a pass over the
-    full-resolution image; they stay ``None`` in the result, the output is the same).
-    Decided by dead-code elimination on the traced operator (unset parameters set to
-    placeholders, on a 2×2 image), once per operator structure; True whenever that fails."""
-    leaves, treedef = jax.tree_util.tree_flatten(op)
-    key = (treedef, tuple((getattr(v, "shape", ()), getattr(v, "dtype", type(v))) for v in leaves))
-    if key not in _NEEDS_UNSET:
-        unset = op.unset()
-        if not unset:
-            _NEEDS_UNSET[key] = False
-            return False
-        dt = jnp.result_type(float)
+    """Whether ``op``'s output depends on any of its unset parameters once they are set.
 
-        def out(vals):
-            o = eqx.tree_at(
-                lambda o: tuple(getattr(o, n) for n in unset), op, vals, is_leaf=lambda v: v is None
-            )
-            return o(jnp.ones((2, 2, 3), dt))
-
-        try:
-            from jax._src.interpreters import partial_eval as pe
-
-            closed = jax.make_jaxpr(out)(tuple(jnp.ones((), dt) for _ in unset))
-            _, used = pe.dce_jaxpr(closed.jaxpr, [True] * len(closed.jaxpr.outvars))
-            needs = any(used)
-        except Exception:  # an operator this check cannot trace: measure, as before
-            needs = True
-        _NEEDS_UNSET[key] = needs
-    return _NEEDS_UNSET[key]
+    False when every unset parameter only serves to estimate another one that is set (the
+    operator's :attr:`~hdrjax.operators.AbstractOperator.only_feeds`), e.g. for
+    ``tumblin_reinhard`` with ``L_wa`` and ``L_white`` given: its ``L_max`` only derives
+    ``L_white``. Then the fit need not measure them (a pass over the full-resolution
+    image; they stay ``None`` in the result, the output is the same). An operator that
+    declares nothing is measured."""
+    feeds = type(op).only_feeds
+    return any(n not in feeds or getattr(op, feeds[n]) is None for n in op.unset())
 
 
 # built once per configuration: an equinox Module's construction costs ~0.05 ms a call

@@ -11,6 +11,7 @@ de Rousiers 2014; colour-hdri ``photometric_exposure_scale_factor_Lagarde2014``)
 """
 
 import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -45,6 +46,10 @@ class Linear(AbstractLuminanceCurve):
     Input: linear RGB (absolute when set by exposure). Output: display-referred linear RGB,
     in [0, 1] up to ``L_max`` (brighter pixels exceed 1 and clip when encoded).
     """
+
+    only_feeds: ClassVar[dict[str, str]] = dict.fromkeys(
+        ("exposure_time", "f_number", "iso", "ev100"), "L_max"
+    )
 
     L_max: Array | None = eqx.field(default=None, converter=param)
     exposure_time: Array | None = eqx.field(default=None, converter=param)

@@ -19,7 +19,7 @@ than the paper's typesetting, which is unverified; with ``log10`` the denominato
 ``γ_d`` itself for ``L_da ≤ 100``. ``gamma_log="log10"`` selects the other reading.
 """
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -162,6 +162,8 @@ class TumblinReinhard(_AbstractTumblin):
         adaptation: ``"log_average"`` (default) or ``"trimmed"`` (P1–P99 log-average).
         gamma_log: ``"ln"`` (default; see module docstring) or ``"log10"``.
     """
+
+    only_feeds: ClassVar[dict[str, str]] = {"L_max": "L_white"}
 
     L_wa: Array | None = eqx.field(default=None, converter=param)
     L_max: Array | None = eqx.field(default=None, converter=param)

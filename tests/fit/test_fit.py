@@ -228,6 +228,40 @@ def test_default_solver_agrees_with_minpack_on_a_numpy_model(cornell, x64):
     np.testing.assert_allclose(res.statistics, want, rtol=1e-8)
 
 
+def _feeding(name):
+    """``{parameter: [parameters it only serves to estimate]}`` of a registered operator."""
+    out = {}
+    for p, q in hdrjax.get_operator(name).only_feeds.items():
+        out.setdefault(q, []).append(p)
+    return out
+
+
+@pytest.mark.parametrize(
+    "name", [n for n in hdrjax.operator_names() if hdrjax.get_operator(n).only_feeds]
+)
+def test_only_feeds_parameters_do_not_change_the_output(name):
+    # what the fit relies on to skip measuring (``only_feeds``, over the registry): with the
+    # estimated parameter set, the values of the parameters that feed it change nothing
+    x = jnp.asarray(_lognormal(5, 8), jnp.float32)
+    for q, ps in _feeding(name).items():
+        op = eqx.tree_at(
+            lambda o, q=q: getattr(o, q),
+            hdrjax.make_operator(name),
+            jnp.asarray(0.37, jnp.float32),  # not the value the feeding ones would give
+            is_leaf=lambda v: v is None,
+        )
+        want = np.asarray(op(x))
+        assert len(np.unique(want)) > 10  # the output varies: its parameters matter
+        for scale in (0.5, 3.0):
+            fed = eqx.tree_at(
+                lambda o, ps=ps: tuple(getattr(o, p) for p in ps),
+                op,
+                tuple(jnp.asarray(scale * (i + 1), jnp.float32) for i in range(len(ps))),
+                is_leaf=lambda v: v is None,
+            )
+            np.testing.assert_array_equal(np.asarray(fed(x)), want, err_msg=f"{ps} -> {q}")
+
+
 def test_unused_measured_parameters_are_not_measured():
     # tumblin_reinhard with L_wa and L_white given never uses L_max (it only derives
     # L_white): the fit skips measuring it (a pass over the full image) and leaves it None;
@@ -239,6 +273,8 @@ def test_unused_measured_parameters_are_not_measured():
     assert not _output_needs_unset(op)
     assert _output_needs_unset(hdrjax.make_operator("tumblin_reinhard", L_wa=2.0))
     assert _output_needs_unset(hdrjax.make_operator("reinhard2002", key=0.2, L_white=3.0))
+    assert not _output_needs_unset(hdrjax.make_operator("linear", L_max=2.0))  # exposure unused
+    assert _output_needs_unset(hdrjax.make_operator("linear", ev100=3.0))  # L_max from ev100
     res = hf.fit(op, x, ht.MeanLuminance(0.3), params="L_wa", max_size=None)
     assert bool(res.success) and res.operator.L_max is None
     L_max = float(np.max(np.asarray(x) @ np.asarray(hdrjax.REC709_WEIGHTS)))
