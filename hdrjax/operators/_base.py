@@ -183,8 +183,7 @@ class AbstractOperator(eqx.Module):
     only_feeds: ClassVar[dict[str, str]] = {}
     """Parameters whose only use is to estimate another one when that one is unset:
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
-    the output (so a fit need not measure it). Parameters not listed count as used; the
-    conformance suite checks every entry."""
+    the output (so a fit need not measure it). Parameters not listed count as used."""
 
     @abc.abstractmethod
     def _measure(self: _Op, p: Prepared) -> _Op:
