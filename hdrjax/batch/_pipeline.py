@@ -25,9 +25,9 @@ import numpy as np
 from jaxtyping import Array, Float, UInt
 
 from .. import _check
-from .._colour import luminance
 from ..io._display import DEFAULT_COMPRESSION
-from ..operators._base import AbstractOperator, Prepared, as_float_image, make_operator
+from ..operators._base import AbstractOperator, as_float_image, make_operator
+from ..operators._call import clean_operator_call
 
 DISPLAY_FORMATS = ("png", "tif", "jpg")
 """Encoded outputs (8 or 16 bit code values; JPEG 8 bit only)."""
@@ -257,14 +257,6 @@ def map_frames(pipeline: "Pipeline", fn: Callable, args: Any, clean: bool) -> An
     if mode == "auto":
         mode = "map" if jax.default_backend() == "cpu" else "vmap"
     return jax.vmap(fn)(args) if clean and mode == "vmap" else jax.lax.map(fn, args)
-
-
-def clean_operator_call(op: AbstractOperator, rgb: Array) -> Array:
-    """``op(rgb)`` for one image known to be finite: the operators' fast path, without the
-    data-dependent check that chooses it (same result as ``op(rgb)`` on such an image)."""
-    L = luminance(rgb, op.weights_)
-    p = Prepared(rgb, L, L, clean=True)
-    return op._measure(p)._apply(p)
 
 
 @eqx.filter_jit

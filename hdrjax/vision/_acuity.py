@@ -26,14 +26,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .._colour import luminance
 from ._fovea import block_mean, mean2x2, upsample
 from ._pcond import acuity
-from ._photometry import (
-    LMIN,
-    _chroma_key,
-    check_rgb,
-    restore,
-    sanitize,
-    weights_of,
-)
+from ._photometry import LMIN, check_rgb, chroma_key, restore, sanitize, weights_of
 from ._view import ResolvedView, View, resolve_view
 
 
@@ -63,7 +56,7 @@ def sample_spacing(
     """pcond's local sample spacing ``s`` (pixels, >= 1) at every pixel."""
     x, ok = sanitize(check_rgb(rgb, image=True))
     view = resolve_view(view, x.shape[0], x.shape[1])
-    w = weights_of(_chroma_key(chromaticities))
+    w = weights_of(chroma_key(chromaticities))
     L = luminance(x, w)
     by, bx = view.fovea_block
     fov, _ = block_mean(L, ok, by, bx)
@@ -95,7 +88,7 @@ def acuity_loss(
     K = max_levels(view) if levels is None else int(levels)
     if K < 0:
         raise ValueError(f"levels: expected an integer >= 0, got {levels!r}")
-    return _acuity_loss(rgb, view, K, _chroma_key(chromaticities))
+    return _acuity_loss(rgb, view, K, chroma_key(chromaticities))
 
 
 @functools.partial(jax.jit, static_argnums=(1, 2, 3))

@@ -49,7 +49,7 @@ from .._scale import quotient
 from ..display import gamma_encode
 from ._fovea import adaptation_luminance
 from ._pcond import tvi
-from ._photometry import LMIN, _as_float, _chroma_key, _matrices, check_rgb, sanitize
+from ._photometry import LMIN, check_rgb, chroma_key, sanitize, xyz_matrices
 
 HPE = (
     (0.38971, 0.68898, -0.07868),
@@ -106,8 +106,8 @@ def fechner_brightness(
     found). Inverse: :func:`fechner_luminance`.
     """
     _check.real(L, "L")
-    L = jnp.maximum(_as_float(L), LMIN)
-    L_a = jnp.maximum(_as_float(L_a), LMIN)
+    L = jnp.maximum(_check.as_float(L), LMIN)
+    L_a = jnp.maximum(_check.as_float(L_a), LMIN)
     # L / L_a overflows for L near the float maximum and a dim L_a: ln L − ln L_a there
     # (where-before-log, so that neither branch's derivative is 0·∞)
     big = ~jnp.isfinite(jax.lax.stop_gradient(L / L_a))
@@ -120,8 +120,8 @@ def fechner_luminance(
 ) -> Float[Array, "*shape"]:
     """Inverse of :func:`fechner_brightness`: ``L = L_a exp(B ΔL(L_a)/L_a)``."""
     _check.real(B, "B")
-    L_a = jnp.maximum(_as_float(L_a), LMIN)
-    arg = _as_float(B) * tvi(L_a) / L_a
+    L_a = jnp.maximum(_check.as_float(L_a), LMIN)
+    arg = _check.as_float(B) * tvi(L_a) / L_a
     # saturates at SATURATION × the float maximum (+Inf, and NaN colours, before)
     top = jnp.log(jnp.finfo(arg.dtype).max * SATURATION)
     return L_a * jnp.exp(jnp.minimum(arg, top - jnp.maximum(jnp.log(L_a), 0.0)))
@@ -239,14 +239,14 @@ class Budak2005(eqx.Module):
 
     def _readapt(self, rgb: Array) -> Array:
         x, ok = sanitize(rgb)
-        m, minv = _matrices(_chroma_key(self.chromaticities))
+        m, minv = xyz_matrices(chroma_key(self.chromaticities))
         X = x[..., 0] * m[0, 0] + x[..., 1] * m[0, 1] + x[..., 2] * m[0, 2]
         Y = luminance(x, tuple(m[1]))
         Z = x[..., 0] * m[2, 0] + x[..., 1] * m[2, 1] + x[..., 2] * m[2, 2]
         if self.adaptation is None:
             La = adaptation_luminance(jnp.where(ok, Y, jnp.nan).reshape(-1, 1), (1, 1))
         else:
-            La = jnp.maximum(_as_float(self.adaptation), LMIN).astype(Y.dtype)
+            La = jnp.maximum(_check.as_float(self.adaptation), LMIN).astype(Y.dtype)
         # background chromaticity: mean XYZ of the finite pixels (the seed's m'_p)
         # (only their ratios are used: summed times 2^-k, k = ceil(log2 of the pixel
         # count), so that the sums cannot overflow, exact for pixels above 2^-100 cd/m²;
@@ -292,7 +292,7 @@ def perceptual_reproduction(
         gamma=float(gamma),
         adaptation=None if adaptation is None else jnp.asarray(adaptation),
         space=ConeOpponentSpace() if space is None else space,
-        chromaticities=_chroma_key(chromaticities),
+        chromaticities=chroma_key(chromaticities),
     )(rgb)
 
 

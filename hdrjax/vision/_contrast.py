@@ -26,7 +26,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from ._pcond import tvi
-from ._photometry import LMIN, _as_float, check_rgb, restore, sanitize
+from ._photometry import LMIN, check_rgb, restore, sanitize
 
 ContrastModel = Literal["pcond", "ward1994"]
 
@@ -45,8 +45,8 @@ def ward1994_scale(
 ) -> Float[Array, "*shape"]:
     """Ward 1994 scale factor ``m = [(1.219 + L_da^0.4)/(1.219 + L_wa^0.4)]^2.5``."""
     _check.real(L_wa, "L_wa")
-    L_wa = jnp.maximum(_as_float(L_wa), 0.0)
-    L_da = jnp.maximum(_as_float(L_da), 0.0)
+    L_wa = jnp.maximum(_check.as_float(L_wa), 0.0)
+    L_da = jnp.maximum(_check.as_float(L_da), 0.0)
     # x**0.4 has an infinite derivative at 0; evaluate it at a tiny positive value there.
     pw = jnp.where(L_wa > 0, jnp.where(L_wa > 0, L_wa, 1.0) ** 0.4, 0.0)
     pd = jnp.where(L_da > 0, jnp.where(L_da > 0, L_da, 1.0) ** 0.4, 0.0)
@@ -87,7 +87,7 @@ def contrast_scale(
     """
     _check.real(L_wa, "L_wa")
     L_da = display_adaptation(model, display_max, display_range)
-    L_wa = jnp.maximum(_as_float(L_wa), LMIN)
+    L_wa = jnp.maximum(_check.as_float(L_wa), LMIN)
     if model == "pcond":
         return tvi(L_da) / tvi(L_wa)
     return ward1994_scale(L_wa, L_da)

@@ -14,13 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from ._photometry import _as_float
-
-
-def _log10_safe(L: Array, floor: float) -> Array:
-    """``log10(max(L, floor))`` with a finite gradient everywhere (0 below ``floor``)."""
-    ok = L > floor
-    return jnp.where(ok, jnp.log10(jnp.where(ok, L, 1.0)), jnp.log10(floor))
+from ._photometry import log10_floor
 
 
 def tvi_photopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
@@ -34,8 +28,8 @@ def tvi_photopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         5.559...
     """
     _check.real(L_a, "L_a")
-    L_a = _as_float(L_a)
-    x = _log10_safe(L_a, 10.0**-2.6)
+    L_a = _check.as_float(L_a)
+    x = log10_floor(L_a, 10.0**-2.6)
     mid = (0.249 * jnp.clip(x, -2.6, 1.9) + 0.65) ** 2.7 - 0.72
     t = jnp.where(x <= -2.6, -0.72, jnp.where(x >= 1.9, x - 1.255, mid))
     return 10.0**t
@@ -48,8 +42,8 @@ def tvi_scotopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     ``x - 0.395`` for ``x >= -1.44``; ``(0.405 x + 1.6)^2.18 - 2.86`` between.
     """
     _check.real(L_a, "L_a")
-    L_a = _as_float(L_a)
-    x = _log10_safe(L_a, 10.0**-3.94)
+    L_a = _check.as_float(L_a)
+    x = log10_floor(L_a, 10.0**-3.94)
     mid = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
     t = jnp.where(x <= -3.94, -2.86, jnp.where(x >= -1.44, x - 0.395, mid))
     return 10.0**t

@@ -24,17 +24,16 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._scale import at_scale
-from ._ferwerda1996 import _log10_safe
 from ._photometry import (
-    _as_float,
-    _chroma_key,
-    _scotopic,
     check_rgb,
+    chroma_key,
     headroom,
     largest_component_reciprocal,
+    log10_floor,
     restore,
     rgb_to_xyz,
     sanitize,
+    scotopic_unscaled,
     xyz_to_rgb,
 )
 
@@ -49,8 +48,8 @@ LOG_LOW, LOG_HIGH = -2.0, 0.6
 def blue_shift_weight(Y: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     """Jensen et al.'s photopic share ``s``: smoothstep of log10 Y from -2 to 0.6."""
     _check.real(Y, "Y")
-    Y = _as_float(Y)
-    x = jnp.clip((_log10_safe(Y, 10.0**LOG_LOW) - LOG_LOW) / (LOG_HIGH - LOG_LOW), 0.0, 1.0)
+    Y = _check.as_float(Y)
+    x = jnp.clip((log10_floor(Y, 10.0**LOG_LOW) - LOG_LOW) / (LOG_HIGH - LOG_LOW), 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)
 
 
@@ -67,7 +66,7 @@ def blue_shift(
         RGB in cd/m²; non-finite pixels are returned unchanged. A pixel without a defined
         chromaticity (X + Y + Z <= 0) takes the blue-shift white.
     """
-    ch = _chroma_key(chromaticities)
+    ch = chroma_key(chromaticities)
     return _blue_shift(check_rgb(rgb), ch)
 
 
@@ -84,7 +83,7 @@ def _blue_shift(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
 def _blue_shift_scaled(chromaticities: tuple[float, ...] | None, x_: Array, c: Array) -> Array:
     """Blue shift of the pixels ``x_`` = RGB × ``c`` (``c`` per pixel), times ``c``."""
     X, Y, Z = rgb_to_xyz(x_, chromaticities)
-    V = _scotopic(x_, chromaticities)  # x_ is scaled already
+    V = scotopic_unscaled(x_, chromaticities)  # x_ is scaled already
     s = blue_shift_weight(Y / c[..., 0])
     # chromaticity from X, Y, Z over the pixel's largest |X|, |Y|, |Z| (constant under
     # differentiation): d(X/tot)/d tot = -X/tot² would over/underflow tot² at 1e±20 cd/m²

@@ -21,20 +21,19 @@ from .._colour import luminance
 from .._interp import lerp
 from .._scale import at_scale
 from . import _fft
-from ._ferwerda1996 import _log10_safe
 from ._fovea import block_mean, upsample
 from ._photometry import (
     BOT_MESOPIC,
     LMIN,
     SWNORM,
     TOP_MESOPIC,
-    _as_float,
-    _chroma_key,
-    _scotopic,
     check_rgb,
+    chroma_key,
     headroom,
+    log10_floor,
     restore,
     sanitize,
+    scotopic_unscaled,
     weights_of,
 )
 from ._view import ResolvedView, View, resolve_view
@@ -58,8 +57,8 @@ def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         0.3913
     """
     _check.real(L_a, "L_a")
-    L_a = _as_float(L_a)
-    x = _log10_safe(L_a, 1.148e-4)
+    L_a = _check.as_float(L_a)
+    x = log10_floor(L_a, 1.148e-4)
     rod = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
     cone = (0.249 * jnp.clip(x, -0.0184, 1.9) + 0.65) ** 2.7 - 0.72
     y = jnp.where(x < -1.44, rod, jnp.where(x < -0.0184, x - 0.395, cone))
@@ -79,7 +78,7 @@ def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
         31.53
     """
     _check.real(L_a, "L_a")
-    x = _log10_safe(_as_float(L_a), LMIN)
+    x = log10_floor(_check.as_float(L_a), LMIN)
     return 17.25 * jnp.arctan(1.4 * x + 0.35) + 25.72
 
 
@@ -90,7 +89,7 @@ def mesopic_weight(L: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     5.62e-3 cd/m², 1 (cones only) at or above 5.62 cd/m², linear in ``L`` between.
     """
     _check.real(L, "L")
-    L = _as_float(L)
+    L = _check.as_float(L)
     return jnp.clip((L - BOT_MESOPIC) / (TOP_MESOPIC - BOT_MESOPIC), 0.0, 1.0)
 
 
@@ -110,7 +109,7 @@ def colour_loss(
     Returns:
         RGB in cd/m²; non-finite pixels are returned unchanged.
     """
-    ch = _chroma_key(chromaticities)
+    ch = chroma_key(chromaticities)
     return _colour_loss(check_rgb(rgb), ch)
 
 
@@ -126,7 +125,7 @@ def _colour_loss(rgb: Array, chromaticities: tuple[float, ...] | None) -> Array:
 
 def _colour_loss_scaled(chromaticities: tuple[float, ...] | None, x: Array, h: Array) -> Array:
     c = mesopic_weight(luminance(x, weights_of(chromaticities)) / h[..., 0])[..., None]
-    V = _scotopic(x, chromaticities)[..., None]  # x is scaled already
+    V = scotopic_unscaled(x, chromaticities)[..., None]  # x is scaled already
     return c * x + (1.0 - c) * (V / SWNORM)
 
 

@@ -33,13 +33,6 @@ SWNORM = 2.26
 """Scotopic/photopic luminance ratio of white (pcond.h ``SWNORM``)."""
 
 
-def _as_float(x: ArrayLike) -> Array:
-    x = jnp.asarray(x)
-    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype in (jnp.float16, jnp.bfloat16):
-        x = x.astype(jnp.result_type(float))
-    return x
-
-
 def check_rgb(
     rgb: ArrayLike, name: str = "rgb", *, image: bool = False, pooled: bool = False
 ) -> Array:
@@ -47,7 +40,7 @@ def check_rgb(
     (``image``), or pixels a function pools statistics over (``pooled``), needs H, W >= 1;
     per-pixel functions take empty arrays (an empty result)."""
     _check.real(rgb, name)
-    rgb = _as_float(rgb)
+    rgb = _check.as_float(rgb)
     if rgb.ndim < 1 or rgb.shape[-1] != 3:
         raise ValueError(f"{name}: expected channels-last RGB (..., 3), got shape {rgb.shape}")
     if image and rgb.ndim != 3:
@@ -60,7 +53,15 @@ def check_rgb(
     return rgb
 
 
-def _chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | None:
+def log10_floor(L: Array, floor: float) -> Array:
+    """``log10(max(L, floor))`` with a finite gradient everywhere (0 below ``floor``): the
+    log luminance of the threshold-versus-intensity curves, floored at their lowest
+    luminance (Ferwerda et al. 1996; pcond's ``LMIN``)."""
+    ok = L > floor
+    return jnp.where(ok, jnp.log10(jnp.where(ok, L, 1.0)), jnp.log10(floor))
+
+
+def chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | None:
     """Hashable, validated primaries: ``None`` for Rec.709/D65, else the 8 floats.
 
     Raises:
@@ -72,17 +73,17 @@ def _chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | N
     if c.shape == (8,) and np.allclose(c, REC709_CHROMATICITIES, atol=1e-4):
         return None
     key = tuple(float(v) for v in c)
-    _matrices(key)  # validates (luminance_weights raises ValueError)
+    xyz_matrices(key)  # validates (luminance_weights raises ValueError)
     return key
 
 
 def weights_of(key: tuple[float, ...] | None) -> tuple[float, float, float]:
     """Luminance weights (the Y row of :func:`rgb_to_xyz_matrix`) of validated primaries."""
-    return tuple(float(w) for w in _matrices(key)[0][1])  # type: ignore[return-value]
+    return tuple(float(w) for w in xyz_matrices(key)[0][1])  # type: ignore[return-value]
 
 
 @functools.lru_cache(maxsize=16)
-def _matrices(key: tuple[float, ...] | None) -> tuple[np.ndarray, np.ndarray]:
+def xyz_matrices(key: tuple[float, ...] | None) -> tuple[np.ndarray, np.ndarray]:
     weights = luminance_weights(key)  # validates the chromaticities
     c = np.asarray(REC709_CHROMATICITIES if key is None else key, dtype=np.float64)
     import colour  # slow import, only when a colour effect runs
@@ -94,7 +95,7 @@ def _matrices(key: tuple[float, ...] | None) -> tuple[np.ndarray, np.ndarray]:
 
 def rgb_to_xyz_matrix(chromaticities: Sequence[float] | None = None) -> np.ndarray:
     """RGB→XYZ matrix (float64, 3×3) whose Y row is :func:`hdrjax.luminance_weights`."""
-    return _matrices(_chroma_key(chromaticities))[0].copy()
+    return xyz_matrices(chroma_key(chromaticities))[0].copy()
 
 
 def _apply3(m: np.ndarray, a: Array, b: Array, c: Array) -> tuple[Array, Array, Array]:
@@ -108,7 +109,7 @@ def rgb_to_xyz(
 ) -> tuple[Array, Array, Array]:
     """CIE XYZ (cd/m² for Y) of linear RGB, as three arrays of shape ``rgb.shape[:-1]``."""
     rgb = check_rgb(rgb)
-    m = _matrices(_chroma_key(chromaticities))[0]
+    m = xyz_matrices(chroma_key(chromaticities))[0]
     X, _, Z = _apply3(m, rgb[..., 0], rgb[..., 1], rgb[..., 2])
     Y = luminance(rgb, tuple(m[1]))
     return X, Y, Z
@@ -118,7 +119,7 @@ def xyz_to_rgb(
     X: ArrayLike, Y: ArrayLike, Z: ArrayLike, chromaticities: Sequence[float] | None = None
 ) -> Float[Array, "*batch 3"]:
     """Inverse of :func:`rgb_to_xyz`: linear RGB, channels last."""
-    minv = _matrices(_chroma_key(chromaticities))[1]
+    minv = xyz_matrices(chroma_key(chromaticities))[1]
     r, g, b = _apply3(minv, jnp.asarray(X), jnp.asarray(Y), jnp.asarray(Z))
     return jnp.stack([r, g, b], axis=-1)
 
@@ -175,12 +176,12 @@ def scotopic_luminance(
     rgb = check_rgb(rgb)
     # homogeneous of degree 1: evaluated on RGB × an exact power of two (1 below 2^64
     # cd/m², same bits), whose XYZ cannot overflow (Z of a white is 1.09 RGB)
-    f = lambda x, _: _scotopic(x, chromaticities)[..., None]  # noqa: E731
+    f = lambda x, _: scotopic_unscaled(x, chromaticities)[..., None]  # noqa: E731
     V = at_scale(f, rgb, headroom(rgb))[..., 0]
     return jnp.minimum(V, jnp.finfo(V.dtype).max)  # V/Y reaches 4.4: saturate
 
 
-def _scotopic(rgb: Array, chromaticities: Sequence[float] | None) -> Array:
+def scotopic_unscaled(rgb: Array, chromaticities: Sequence[float] | None) -> Array:
     X, Y, Z = rgb_to_xyz(rgb, chromaticities)
     r = largest_component_reciprocal(X, Y, Z)
     x, y, z = X * r, Y * r, Z * r  # the largest of |x|, |y|, |z| is 1

@@ -34,12 +34,13 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import _check
 from .._colour import luminance
 from ..operators._base import AbstractLuminanceCurve, AbstractOperator, make_operator
+from ..operators._call import clean_operator_call
 from ._acuity import acuity_loss, max_levels
 from ._contrast import DISPLAY_MAX, DISPLAY_RANGE, ContrastModel, contrast
 from ._fovea import adaptation_luminance, pixel_stride
 from ._jensen2001 import blue_shift
 from ._pcond import colour_loss, veil
-from ._photometry import LMIN, _chroma_key, check_rgb, weights_of
+from ._photometry import LMIN, check_rgb, chroma_key, weights_of
 from ._report import (
     EFFECTS,
     SceneReport,
@@ -203,7 +204,7 @@ class HumanVision(eqx.Module):
         if "glare" in names and glare_model == "spencer1995":
             spec, size = glare_spectrum(rv, glare_variant, radius_deg=glare_radius_deg, dtype=dtype)
         levels = max_levels(rv) if acuity_levels is None else int(acuity_levels)
-        ch = _chroma_key(chromaticities)  # validated now, not at trace time
+        ch = chroma_key(chromaticities)  # validated now, not at trace time
         return cls(
             effects=names,
             view=rv,
@@ -323,7 +324,7 @@ def absolute_rgb(
             )
         rgb, factor = image, float(scale)
     rgb = check_rgb(rgb, "image", image=True)
-    ch = _chroma_key(chromaticities)
+    ch = chroma_key(chromaticities)
     if factor == 1.0:
         return rgb, ch
     return _to_cd(rgb, jnp.asarray(factor, rgb.dtype)), ch
@@ -405,8 +406,6 @@ def _analyze_and_tonemap(
     otherwise). The tone mapping takes the operators' finite-image path; its luminance is
     the analysis's (the same expression, merged by XLA when the weights are the same), so
     the image is read for both at once."""
-    from ..batch._pipeline import clean_operator_call  # the batch package imports vision
-
     L = luminance(rgb, weights)
     return (clean_operator_call(op, rgb), L, *fast_statistics(L, block, stride))
 

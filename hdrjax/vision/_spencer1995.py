@@ -47,7 +47,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from . import _fft
-from ._photometry import BOT_MESOPIC, TOP_MESOPIC, _as_float, check_rgb, restore, sanitize
+from ._photometry import BOT_MESOPIC, TOP_MESOPIC, check_rgb, restore, sanitize
 from ._view import ResolvedView, View, resolve_view
 
 Variant = Literal["photopic", "mesopic", "scotopic"]
@@ -99,7 +99,7 @@ def spencer1995_psf(
     """
     _check.real(theta_deg, "theta_deg")
     w = _weights(variant)
-    t = jnp.maximum(_as_float(theta_deg), 0.0)
+    t = jnp.maximum(_check.as_float(theta_deg), 0.0)
     lam = float(wavelength_nm)
     # Written so that no intermediate overflows, nor its derivative, up to the float max:
     # 1/(θ + a) before the power (the derivative of 20.91/(θ + a)³ is otherwise formed from
