@@ -39,7 +39,7 @@ def _exr_parts(path: str) -> list[dict]:
 
     from ..io import _exr
 
-    f = _exr._open(Path(path))  # full read: the header alone does not give pixel types
+    f = _exr.open_exr(Path(path))  # full read: the header alone does not give pixel types
     parts = []
     for i, part in enumerate(f.parts):
         h = part.header
@@ -48,7 +48,7 @@ def _exr_parts(path: str) -> list[dict]:
             chans.append(
                 {
                     "name": name,
-                    "type": _exr._pixel_type(c.pixels),
+                    "type": _exr.stored_pixel_type(c.pixels),
                     "sampling": [int(c.xSampling), int(c.ySampling)],
                 }
             )

@@ -30,6 +30,7 @@ import numpy as np
 from jaxtyping import Float
 
 from .. import _check
+from .._colour import luminance_weights
 from ..layers import _model as M
 from ..layers._errors import MissingLayerError, ReadError
 from . import _exr, _pfm, _rgbe
@@ -128,7 +129,7 @@ def _hdr_image(rgb: np.ndarray, info: dict, path: Path) -> M.LayeredImage:
     elif info["primaries"] is not None:
         # Photoshop writes PRIMARIES=0 0 0 0 0 0 0 0: only valid primaries are used
         try:
-            M._luminance_weights(info["primaries"])
+            luminance_weights(info["primaries"])
             chroma = info["primaries"]
         except ValueError:
             chroma = None
@@ -226,9 +227,9 @@ def _read_sidecar(p: Path, key: str) -> tuple[np.ndarray, tuple[str, ...] | None
         img = _read_main(p, fmt, None, None)
         arr = img.image[:, :, 0] if img.image.shape[2] == 1 else img.image
         return arr, None, "float"
-    f = _exr._open(p)
-    chans, _ = _exr._part_channels(f.parts[0], p.name)
-    groups = _exr._groups(chans)
+    f = _exr.open_exr(p)
+    chans, _ = _exr.part_channels(f.parts[0], p.name)
+    groups = _exr.channel_groups(chans)
     if len(groups) != 1:
         raise ReadError(
             f"{p.name}: a sidecar layer file must hold one channel group; found "
@@ -243,9 +244,9 @@ def _read_sidecar(p: Path, key: str) -> tuple[np.ndarray, tuple[str, ...] | None
                 f"{p.name}: a position sidecar needs channels X, Y, Z; found {', '.join(bases)}"
             )
         full, bases = ordered, ["X", "Y", "Z"]
-    arr = _exr._stack(chans, full)
-    ptype = _exr._pixel_type(arr)
-    return _exr._as_layer_array(arr), (tuple(bases) if len(bases) > 1 else None), ptype
+    arr = _exr.stack_channels(chans, full)
+    ptype = _exr.stored_pixel_type(arr)
+    return _exr.as_layer_array(arr), (tuple(bases) if len(bases) > 1 else None), ptype
 
 
 def _attach_sidecars(img: M.LayeredImage) -> M.LayeredImage:

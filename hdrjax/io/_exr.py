@@ -106,7 +106,7 @@ def _window(w: Any) -> tuple[int, int, int, int]:
     return (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
 
 
-def _pixel_type(arr: np.ndarray) -> str:
+def stored_pixel_type(arr: np.ndarray) -> str:
     return {np.dtype(np.float16): "half", np.dtype(np.float32): "float"}.get(arr.dtype, "uint")
 
 
@@ -189,7 +189,7 @@ def _check_header(name: str, size: int, headers: list[dict]) -> None:
             raise ReadError(f"{name}: deep OpenEXR images are not supported")
 
 
-def _open(path: Path):
+def open_exr(path: Path):
     name = path.name
     OpenEXR = _exr()
     try:
@@ -227,7 +227,7 @@ def _open(path: Path):
     return f
 
 
-def _part_channels(part, name: str) -> tuple[dict[str, np.ndarray], tuple[int, int, int, int]]:
+def part_channels(part, name: str) -> tuple[dict[str, np.ndarray], tuple[int, int, int, int]]:
     """Channels of a part at full data-window resolution (subsampled ones upsampled)."""
     header = part.header
     dw = _window(header["dataWindow"])
@@ -282,7 +282,7 @@ def xyz_order(bases: list[str], full: list[str]) -> list[str] | None:
     return [f for _, f in sorted(zip([_XYZ_ORDER[b] for b in bases], full, strict=True))]
 
 
-def _stack(chans: dict[str, np.ndarray], names: list[str]) -> np.ndarray:
+def stack_channels(chans: dict[str, np.ndarray], names: list[str]) -> np.ndarray:
     arrs = [chans[n] for n in names]
     if len(arrs) == 1:
         return arrs[0]
@@ -290,11 +290,11 @@ def _stack(chans: dict[str, np.ndarray], names: list[str]) -> np.ndarray:
     return np.stack([a.astype(dt, copy=False) for a in arrs], axis=2)
 
 
-def _as_layer_array(arr: np.ndarray) -> np.ndarray:
+def as_layer_array(arr: np.ndarray) -> np.ndarray:
     return arr.astype(np.float32) if arr.dtype == np.float16 else arr
 
 
-def _groups(chans: dict[str, np.ndarray]) -> dict[str, list[str]]:
+def channel_groups(chans: dict[str, np.ndarray]) -> dict[str, list[str]]:
     groups: dict[str, list[str]] = {}
     for cname in chans:
         g, b = _split(cname)
@@ -315,18 +315,18 @@ def _image_from_group(
     s = set(bases)
     if {"R", "G", "B"} <= s:
         used = ["R", "G", "B"]
-        return _stack(chans, [full(b) for b in used]), ("R", "G", "B"), used, None
+        return stack_channels(chans, [full(b) for b in used]), ("R", "G", "B"), used, None
     if {"Y", "RY", "BY"} <= s:
         used = ["Y", "RY", "BY"]
-        return _stack(chans, [full(b) for b in used]), ("Y", "RY", "BY"), used, None
+        return stack_channels(chans, [full(b) for b in used]), ("Y", "RY", "BY"), used, None
     if "Y" in s and not ({"X", "Z"} <= s):
-        return _stack(chans, [full("Y")]), ("Y",), ["Y"], None
+        return stack_channels(chans, [full("Y")]), ("Y",), ["Y"], None
     spec = [(float(m.group(1).replace(",", ".")), b) for b in bases if (m := _SPECTRAL_RE.match(b))]
     if spec and group in ("S0", ""):
         spec.sort()
         used = [b for _, b in spec]
         wl = np.array([v for v, _ in spec], dtype=np.float32)
-        return _stack(chans, [full(b) for b in used]), tuple(used), used, wl
+        return stack_channels(chans, [full(b) for b in used]), tuple(used), used, wl
     return None
 
 
@@ -388,7 +388,7 @@ def read_exr(
     """
     path = Path(path)
     name = path.name
-    f = _open(path)
+    f = open_exr(path)
     try:
         parts = list(f.parts)
     except Exception as e:
@@ -414,12 +414,12 @@ def read_exr(
     main = parts[index]
     header = main.header
     try:
-        chans, dw = _part_channels(main, name)
+        chans, dw = part_channels(main, name)
     except ReadError:
         raise
     except Exception as e:
         raise ReadError(f"{name}: corrupt OpenEXR pixel data ({e})") from None
-    groups = _groups(chans)
+    groups = channel_groups(chans)
     views = [str(v) for v in header.get("multiView", []) or []]
 
     # -- choose the main image ---------------------------------------------------------
@@ -432,7 +432,7 @@ def read_exr(
         got = _image_from_group(target, bases, chans)
         if got is None:
             full = [f"{target}.{b}" for b in bases]
-            img = _stack(chans, full)
+            img = stack_channels(chans, full)
             got = (img, tuple(bases), bases, None)
         main_group = target
     else:
@@ -449,7 +449,7 @@ def read_exr(
             # its channels are the image
             ((main_group, bases),) = groups.items()
             full = [f"{main_group}.{b}" if main_group else b for b in bases]
-            got = (_stack(chans, full), tuple(bases), bases, None)
+            got = (stack_channels(chans, full), tuple(bases), bases, None)
         if got is None:
             raise ReadError(
                 f"{name}: no image channels (R, G, B / Y / Y, RY, BY / S0.<λ>nm) in part "
@@ -457,7 +457,7 @@ def read_exr(
                 "pass layer= to pick one"
             )
     image, ch_names, used, wavelengths = got
-    ptype = _pixel_type(chans[f"{main_group}.{used[0]}" if main_group else used[0]])
+    ptype = stored_pixel_type(chans[f"{main_group}.{used[0]}" if main_group else used[0]])
 
     # -- layers of the chosen part -----------------------------------------------------
     layers: dict[str, Any] = {}
@@ -484,9 +484,9 @@ def read_exr(
                     full, bs = ordered, ["X", "Y", "Z"]
             if key in layers:
                 key = g + "." + bs[0] if g else bs[0]
-            arr = _stack(chans, full)
-            pixel_types[key] = _pixel_type(arr)
-            layers[key] = _as_layer_array(arr)
+            arr = stack_channels(chans, full)
+            pixel_types[key] = stored_pixel_type(arr)
+            layers[key] = as_layer_array(arr)
             if len(bs) > 1:
                 layer_channels[key] = tuple(bs)
     # -- other parts become layers -----------------------------------------------------
@@ -494,14 +494,14 @@ def read_exr(
         if i == index:
             continue
         try:
-            pch, pdw = _part_channels(p, name)
+            pch, pdw = part_channels(p, name)
         except ReadError:
             raise
         except Exception as e:
             raise ReadError(
                 f"{name}: corrupt OpenEXR pixel data in part {names[i]!r} ({e})"
             ) from None
-        pg = _groups(pch)
+        pg = channel_groups(pch)
         for g, bases in pg.items():
             full = [f"{g}.{b}" if g else b for b in bases]
             key = names[i] if len(pg) == 1 else f"{names[i]}.{g or 'main'}"
@@ -514,9 +514,9 @@ def read_exr(
                 ordered = xyz_order(bases, full)
                 if ordered is not None:
                     full, bases = ordered, ["X", "Y", "Z"]
-            arr = _stack(pch, full)
-            pixel_types[key] = _pixel_type(arr)
-            layers[key] = _place(_as_layer_array(arr), pdw, dw)
+            arr = stack_channels(pch, full)
+            pixel_types[key] = stored_pixel_type(arr)
+            layers[key] = _place(as_layer_array(arr), pdw, dw)
             if len(bases) > 1:
                 layer_channels[key] = tuple(bases)
 
