@@ -9,7 +9,12 @@ import argparse
 import sys
 
 from ..io._display import DEFAULT_COMPRESSION
-from ._cmd_tonemap import build_operator
+from ._cmd_tonemap import (
+    SHORTCUT_OPTIONS,
+    add_parameter_shortcuts,
+    add_set_argument,
+    build_operator,
+)
 from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
 
 
@@ -45,7 +50,11 @@ def register(subparsers) -> None:
         help='frames: files or quoted glob patterns ("frames/*.exr"), expanded by hdrjax',
     )
     p.add_argument("-o", "--output", required=True, help="output folder (created if missing)")
-    p.add_argument("--method", default="reinhard2002", help="operator name (default reinhard2002)")
+    p.add_argument(
+        "--method",
+        default="reinhard2002",
+        help="operator name (see `hdrjax operators`; default reinhard2002)",
+    )
     mode = p.add_mutually_exclusive_group()
     mode.add_argument(
         "--same-parameters",
@@ -75,11 +84,8 @@ def register(subparsers) -> None:
         default=5.0,
         help="time constant of --smooth in frames (default 5)",
     )
-    p.add_argument("--key", type=positive_float, help="Reinhard key a (default: estimated)")
-    p.add_argument("--white", type=positive_float, help="L_white (default: estimated)")
-    p.add_argument("--L-wa", dest="L_wa", type=positive_float, help="adaptation, cd/m²")
-    p.add_argument("--L-max", dest="L_max", type=positive_float, help="luminance mapped to white")
-    p.add_argument("--L-da", dest="L_da", type=positive_float, help="display adaptation, cd/m²")
+    add_set_argument(p)
+    add_parameter_shortcuts(p, SHORTCUT_OPTIONS[:5])
     p.add_argument(
         "--format",
         choices=("png", "tif", "jpg", "exr", "hdr", "pfm"),

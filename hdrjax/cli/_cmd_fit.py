@@ -7,6 +7,7 @@ import re
 from ._cmd_tonemap import (
     add_encoding_arguments,
     add_input_output_method_arguments,
+    add_set_argument,
     add_table_and_scale_arguments,
     build_operator,
     check_output,
@@ -28,16 +29,6 @@ from ._common import (
 
 EXIT_NOT_CONVERGED = 3
 """Exit status when the fit did not converge (ran out of steps, or ended non-finite)."""
-
-DEFAULT_PARAMS = {
-    "reinhard2002": ("key", "L_white"),
-    "reinhard2002_local": ("key",),
-    "tumblin_reinhard": ("L_wa", "L_white"),
-    "tumblin1999": ("L_wa", "L_max"),
-    "linear": ("L_max",),
-}
-"""Parameters fitted when no ``--param`` is given; other operators: those left to the
-image (``None``), as :func:`hdrjax.fit.fit` does."""
 
 TARGET_FORMS = (
     "mean=V (mean display luminance), pNN=V (display-luminance percentile NN, e.g. p1=0.02,"
@@ -89,17 +80,10 @@ def register(subparsers) -> None:
         "--param",
         action="append",
         metavar="NAME",
-        help="a parameter to fit (repeatable; default: reinhard2002 key and L_white, "
-        "tumblin_reinhard L_wa and L_white, tumblin1999 L_wa and L_max, linear L_max, "
-        "reinhard2002_local key; other operators: the ones estimated from the image)",
+        help="a parameter to fit (repeatable; default: the operator's, which `hdrjax "
+        "operators NAME` lists, e.g. key and L_white for reinhard2002)",
     )
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="set a parameter (repeatable): the start value of a fitted one, or a fixed value",
-    )
+    add_set_argument(p, ": the start value of a fitted one, or a fixed value")
     p.add_argument("--max-steps", type=int, default=100, help="solver step limit (100)")
     p.add_argument(
         "--max-size",
@@ -250,34 +234,6 @@ def build_target(parsed, args, shape, weights, max_size):
     return target, labels
 
 
-def _set_values(op, sets: list[str]):
-    import dataclasses
-
-    from ..operators import parameter_names
-
-    values = {}
-    for text in sets:
-        name, sep, value = text.partition("=")
-        try:
-            if not sep:
-                raise ValueError
-            values[name.strip()] = float(value)
-        except ValueError:
-            raise UsageError(f"--set {text!r}: expected NAME=NUMBER") from None
-    if not values:
-        return op
-    valid = parameter_names(type(op))
-    bad = sorted(set(values) - set(valid))
-    if bad:
-        raise UsageError(
-            f"--set: {op.name} has no parameter {', '.join(bad)}; valid: {', '.join(valid)}"
-        )
-    try:
-        return dataclasses.replace(op, **values)
-    except ValueError as e:
-        raise UsageError(f"--set: {e}") from None
-
-
 def run(args: argparse.Namespace) -> int:
     check_output(args)
     parsed = parse_targets(args.target)
@@ -286,8 +242,18 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--max-steps: expected an integer >= 1, got {args.max_steps}")
     if args.max_size < 0:
         raise UsageError(f"--max-size: expected an integer >= 0, got {args.max_size}")
-    op = _set_values(build_operator(args), args.set)
-    params = tuple(args.param) if args.param else DEFAULT_PARAMS.get(op.name)
+    op = build_operator(args)
+    params = tuple(args.param) if args.param else op.default_fit_params
+    if not params:
+        from ..operators import parameter_info
+
+        names = ", ".join(i.name for i in parameter_info(op) if not i.static)
+        raise UsageError(
+            f"--param: {op.name} has no parameters fitted by default; give --param NAME"
+            f" (one of {names})"
+            if names
+            else f"--param: {op.name} has no parameters to fit"
+        )
     img, rgb = load_rgb(args.input, args.scale)
     op = with_file_weights(op, img)
     max_size = args.max_size or None

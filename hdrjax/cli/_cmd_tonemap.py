@@ -17,18 +17,13 @@ from ._common import (
     refuse_overwriting_inputs,
 )
 
-# command-line option -> operator parameter, and the operators that accept it
-OPTION_PARAMS = {
-    "key": "key",
-    "white": "L_white",
-    "L_wa": "L_wa",
-    "L_max": "L_max",
-    "L_da": "L_da",
-    "exposure_time": "exposure_time",
-    "f_number": "f_number",
-    "iso": "iso",
-    "ev100": "ev100",
-}
+SHORTCUTS = {"white": "L_white"}
+"""Named options whose parameter has another name; the others (``--key``, ``--L-wa``…)
+set the parameter of their own name. Each is a shortcut for ``--set PARAM=VALUE``."""
+SHORTCUT_OPTIONS = (
+    "key", "white", "L_wa", "L_max", "L_da", "exposure_time", "f_number", "iso", "ev100"
+)  # fmt: skip
+"""The named options ``tonemap`` and ``fit`` take (``batch`` the first five)."""
 
 
 def register(subparsers) -> None:
@@ -39,38 +34,48 @@ def register(subparsers) -> None:
         "(Reinhard 2002 JGT key and white point, log-average adaptation luminance).",
     )
     add_input_output_method_arguments(p)
-    p.add_argument("--key", type=positive_float, help="Reinhard key a (default: JGT estimate)")
-    p.add_argument(
-        "--white",
-        type=positive_float,
-        help="L_white (Reinhard: scaled units; tumblin_reinhard: display units)",
-    )
-    p.add_argument(
-        "--L-wa",
-        dest="L_wa",
-        type=positive_float,
-        help="world adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)",
-    )
-    p.add_argument(
-        "--L-max",
-        dest="L_max",
-        type=positive_float,
-        help="luminance mapped to white / not clipped (linear, tumblin_reinhard)",
-    )
-    p.add_argument(
-        "--L-da",
-        dest="L_da",
-        type=positive_float,
-        help="display adaptation luminance, cd/m² (tumblin_reinhard, tumblin1999)",
-    )
-    p.add_argument("--exposure-time", type=positive_float, help="seconds (linear)")
-    p.add_argument("--f-number", type=positive_float, help="aperture N (linear)")
-    p.add_argument("--iso", type=positive_float, help="ISO speed S (linear)")
-    p.add_argument("--ev100", type=float, help="exposure value at ISO 100 (linear)")
+    add_set_argument(p)
+    add_parameter_shortcuts(p, SHORTCUT_OPTIONS)
     add_table_and_scale_arguments(p)
     add_encoding_arguments(p)
     p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
     p.set_defaults(func=run)
+
+
+def add_set_argument(p: argparse.ArgumentParser, extra: str = "") -> None:
+    """``--set PARAM=VALUE`` (repeatable): any parameter of the ``--method`` operator."""
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="PARAM=VALUE",
+        help="set a parameter of the operator (repeatable; `hdrjax operators NAME` lists them"
+        f" with their ranges){extra}",
+    )
+
+
+def add_parameter_shortcuts(p: argparse.ArgumentParser, options: tuple[str, ...]) -> None:
+    """Named options ``--key``, ``--white``… for common parameters (shortcuts for ``--set``),
+    their help and type from the registered operators' metadata."""
+    from ..operators import get_operator, operator_names, parameter_info
+
+    for dest in options:
+        name = SHORTCUTS.get(dest, dest)
+        found = [
+            (op, info)
+            for op in operator_names()
+            for info in parameter_info(get_operator(op))
+            if info.name == name
+        ]
+        _, first = found[0]
+        positive = all(i.range is not None and i.range[0] >= 0 for _, i in found)
+        unit = f" [{first.unit}]" if first.unit else ""
+        p.add_argument(
+            "--" + dest.replace("_", "-"),
+            dest=dest,
+            type=positive_float if positive else float,
+            help=f"{first.help}{unit} (--set {name}=VALUE; {', '.join(op for op, _ in found)})",
+        )
 
 
 def add_input_output_method_arguments(p: argparse.ArgumentParser) -> None:
@@ -80,7 +85,7 @@ def add_input_output_method_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--method",
         default="reinhard2002",
-        help="operator name (see `hdrjax info`; default reinhard2002)",
+        help="operator name (see `hdrjax operators`; default reinhard2002)",
     )
 
 
@@ -160,29 +165,104 @@ def write_output(args: argparse.Namespace, encoded) -> None:
         raise DataError(f"{args.output}: cannot write: {e}") from None
 
 
+def parse_set(cls, texts: list[str]) -> dict:
+    """``--set PARAM=VALUE`` texts as the operator's parameters: numbers (comma-separated
+    for a vector), integers, or names where the parameter has choices. An unknown
+    parameter, a malformed value or one outside the parameter's range → UsageError naming
+    the parameter and what it takes."""
+    infos = {i.name: i for i in _parameter_info(cls)}
+    settable = [n for n, i in infos.items() if _settable(i)]
+    out = {}
+    for text in texts:
+        name, sep, value = text.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not name or not value:
+            raise UsageError(f"--set {text!r}: expected PARAM=VALUE")
+        info = infos.get(name) or infos.get(name.replace("-", "_"))
+        if info is None:
+            raise UsageError(
+                f"--set {text!r}: {cls.name} has no parameter {name!r};"
+                f" valid: {', '.join(settable)}"
+            )
+        if not _settable(info):
+            raise UsageError(f"--set {text!r}: {info.name} is not set with --set ({info.help})")
+        if info.name in out:
+            raise UsageError(f"--set {text!r}: {info.name} is given twice")
+        out[info.name] = _parse_value(cls, info, text, value)
+    return out
+
+
+def _parameter_info(cls):
+    from ..operators import parameter_info
+
+    return parameter_info(cls)
+
+
+def _settable(info) -> bool:
+    """Scalars, fixed-length vectors and named settings (not the weights, which come from
+    the file, nor a table's knots)."""
+    return info.shape is not None and not isinstance(info.default, tuple)
+
+
+def _parse_value(cls, info, text: str, value: str):
+    kind = "one of" if info.choices else "a number in"
+    unit = f", {info.unit}" if info.unit else ""
+    expected = f"{info.name}: expected {kind} {info.range_text() or 'any value'} ({cls.name}{unit})"
+    if info.choices:
+        v = value
+    else:
+        parts = value.split(",")
+        n = 1 if info.shape == () else int(info.shape[0])
+        if len(parts) != n:
+            raise UsageError(f"--set {text!r}: {expected}, {n} comma-separated, got {value!r}")
+        integer = isinstance(info.default, int) and not isinstance(info.default, bool)
+        try:
+            nums = [int(x) if integer else float(x) for x in parts]
+        except ValueError:
+            raise UsageError(f"--set {text!r}: {expected}, got {value!r}") from None
+        v = nums[0] if info.shape == () else tuple(nums)
+    if not info.contains(v):
+        raise UsageError(f"--set {text!r}: {expected}, got {value!r}")
+    return v
+
+
 def build_operator(args: argparse.Namespace):
-    """The operator the arguments describe; unknown names or misplaced options → UsageError."""
-    from ..operators import Tabulated, get_operator, parameter_names
+    """The operator the arguments describe (``--method``, ``--set``, the named shortcuts,
+    ``--table``); unknown names, misplaced options and values outside a parameter's range
+    → UsageError."""
+    from ..operators import Tabulated, get_operator
 
     try:
         cls = get_operator(args.method)
     except ValueError as e:
         raise UsageError(str(e)) from None
+    infos = {i.name: i for i in _parameter_info(cls)}
     params = {}
-    valid = parameter_names(cls)
-    for opt, name in OPTION_PARAMS.items():
-        value = getattr(args, opt, None)
+    for dest in SHORTCUT_OPTIONS:
+        value = getattr(args, dest, None)
         if value is None:
             continue
-        if name not in valid:
-            flag = "--" + opt.replace("_", "-")
+        name = SHORTCUTS.get(dest, dest)
+        flag = "--" + dest.replace("_", "-")
+        info = infos.get(name)
+        if info is None:
             raise UsageError(f"{flag} does not apply to --method {cls.name}")
+        if not info.contains(value):
+            unit = f", {info.unit}" if info.unit else ""
+            raise UsageError(
+                f"{flag}: {name}: expected a number in {info.range_text()} ({cls.name}{unit}),"
+                f" got {value:g}"
+            )
+        params[name] = value
+    for name, value in parse_set(cls, getattr(args, "set", None) or []).items():
+        if name in params:
+            raise UsageError(f"--set {name}=...: {name} is also given by its named option")
         params[name] = value
     if cls.name == "tabulated":
         if not args.table:
             raise UsageError("--method tabulated needs --table FILE")
         try:
-            return Tabulated.from_file(args.table)
+            return Tabulated.from_file(args.table, **params)
         except ValueError as e:
             raise DataError(str(e)) from None
     if args.table:
@@ -260,10 +340,16 @@ def run(args: argparse.Namespace) -> int:
 
 def with_file_weights(op, img):
     """The operator with the file's luminance weights (operators that have a setting)."""
+    return with_weights(op, img.luminance_weights)
+
+
+def with_weights(op, weights):
+    """The operator with these luminance weights; per-channel operators (no ``weights``
+    parameter) as they are."""
     import dataclasses
 
     if "weights" in {f.name for f in dataclasses.fields(op)}:
-        op = dataclasses.replace(op, weights=img.luminance_weights)
+        op = dataclasses.replace(op, weights=weights)
     return op
 
 

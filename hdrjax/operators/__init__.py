@@ -8,9 +8,12 @@ encoding (:mod:`hdrjax.display`). Every operator works under ``jit``, ``vmap`` a
 from ._base import (
     AbstractLuminanceCurve as AbstractLuminanceCurve,
     AbstractOperator as AbstractOperator,
+    ParameterInfo as ParameterInfo,
     get_operator as get_operator,
     make_operator as make_operator,
     operator_names as operator_names,
+    parameter as parameter,
+    parameter_info as parameter_info,
     parameter_names as parameter_names,
     register as register,
     tonemap as tonemap,

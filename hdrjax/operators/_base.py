@@ -46,7 +46,160 @@ def param(x: ArrayLike | None) -> Array | None:
 
 
 def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
-    return eqx.field(static=True, default=default, converter=lambda w: tuple(float(v) for v in w))
+    return parameter(
+        default,
+        help="luminance weights (R, G, B) of the image's primaries (the command line takes"
+        " them from the file)",
+        static=True,
+        shape=(3,),
+        converter=lambda w: tuple(float(v) for v in w),
+    )
+
+
+POOLING = ("mean", "log_mean", "max", "min")
+"""How an estimated parameter pools over frames (:class:`ParameterInfo`)."""
+
+_META = "hdrjax"  # the field-metadata key holding a field's ParameterInfo
+_INTERVAL = re.compile(r"^\s*([\[(])\s*([^,\s]+)\s*,\s*([^,\s]+)\s*([\])])\s*$")
+
+
+@dataclasses.dataclass(frozen=True)
+class ParameterInfo:
+    """What an operator declares about one parameter (see :func:`parameter`).
+
+    Attributes:
+        name: the field name (the keyword of the constructor and of ``--set``).
+        default: the default value; ``None`` for a parameter estimated from the image (or
+            an alternative to another one); ``dataclasses.MISSING`` when required.
+        help: one line for the user.
+        unit: ``"cd/m²"``, ``"image units"`` (relative luminance), ``"EV"``, ``"s"``…;
+            empty for a pure number.
+        range: valid values ``(lo, hi)``, ``closed`` saying which ends are included;
+            ``None`` for settings that are not numbers.
+        closed: whether ``lo`` and ``hi`` themselves are valid.
+        estimated: ``None`` means "measure this image".
+        pooling: how the estimated values of several frames combine: ``"mean"`` and
+            ``"log_mean"`` (pixel-weighted arithmetic and geometric means), ``"max"``,
+            ``"min"``; ``None`` for a parameter that is not estimated.
+        static: a setting fixed at compile time (not a pytree leaf: not differentiable).
+        choices: the valid values of a setting that is a name.
+        shape: the shape of an array parameter (``()``: a scalar; ``None``: any length).
+    """
+
+    name: str
+    default: Any
+    help: str
+    unit: str = ""
+    range: tuple[float, float] | None = None
+    closed: tuple[bool, bool] = (True, True)
+    estimated: bool = False
+    pooling: str | None = None
+    static: bool = False
+    choices: tuple[str, ...] | None = None
+    shape: tuple[int, ...] | None = ()
+
+    @property
+    def required(self) -> bool:
+        return self.default is dataclasses.MISSING
+
+    def range_text(self) -> str:
+        """The range in interval notation, ``(0, inf)``; the choices ``a | b``; or ``""``."""
+        if self.choices:
+            return " | ".join(self.choices)
+        if self.range is None:
+            return ""
+        lo, hi = (f"{v:g}" for v in self.range)
+        return f"{'[('[not self.closed[0]]}{lo}, {hi}{'])'[not self.closed[1]]}"
+
+    def contains(self, value: Any) -> bool:
+        """Whether a concrete value (a number, array or name) is valid."""
+        if self.choices is not None:
+            return value in self.choices
+        if self.range is None:
+            return True
+        v = np.asarray(value, np.float64)
+        lo, hi = self.range
+        above = v >= lo if self.closed[0] else v > lo
+        below = v <= hi if self.closed[1] else v < hi
+        return bool(np.all(above & below))
+
+    def check(self, value: Any, owner: str) -> None:
+        """``ValueError`` naming the parameter and its range unless ``value`` is valid;
+        ``None`` (estimate) and traced values pass."""
+        if value is None or _traced(value) or self.contains(value):
+            return
+        shown = value if isinstance(value, str) else np.asarray(value).tolist()
+        what = "one of" if self.choices else "a value in"
+        unit = f", {self.unit}" if self.unit else ""
+        raise ValueError(
+            f"{self.name}: expected {what} {self.range_text()} ({owner}{unit}), got {shown!r}"
+        )
+
+
+def _interval(text: str, where: str) -> tuple[tuple[float, float], tuple[bool, bool]]:
+    m = _INTERVAL.match(text)
+    try:
+        assert m is not None
+        lo, hi = float(m[2]), float(m[3])
+        assert lo < hi
+    except (AssertionError, ValueError):
+        raise ValueError(
+            f"range: expected an interval such as '(0, inf)' or '[0, 1]', got {text!r} ({where})"
+        ) from None
+    return (lo, hi), (m[1] == "[", m[4] == "]")
+
+
+def parameter(
+    default: Any = dataclasses.MISSING,
+    *,
+    help: str,
+    unit: str = "",
+    range: str | None = None,
+    estimated: bool = False,
+    pooling: str | None = None,
+    static: bool = False,
+    choices: tuple[str, ...] | None = None,
+    shape: tuple[int, ...] | None = (),
+    converter: Callable[[Any], Any] | None = None,
+) -> Any:
+    """An operator field with what the operator knows about it (:class:`ParameterInfo`).
+
+    Array parameters (the default) go through :func:`param` (numbers become arrays of the
+    default float dtype; ``None`` stays ``None``), so ``jit`` traces them and ``grad`` can
+    differentiate them; ``static=True`` makes a setting. ``range`` is an interval,
+    ``"(0, inf)"``, ``"[-8, 8]"``, checked by :func:`make_operator` and the command line
+    (concrete values only). An ``estimated`` parameter (default ``None``: measured from
+    the image) says how it pools over frames. Read back with :func:`parameter_info`.
+
+    >>> class Op(AbstractOperator):  # doctest: +SKIP
+    ...     key: Array | None = parameter(None, help="the key", range="(0, inf)",
+    ...                                   estimated=True, pooling="log_mean")
+    """
+    where = help.split(";")[0]
+    if pooling is not None and pooling not in POOLING:
+        raise ValueError(f"pooling: expected one of {', '.join(POOLING)}, got {pooling!r}")
+    if estimated != (pooling is not None):
+        raise ValueError(f"pooling: an estimated parameter needs one, others none ({where})")
+    if estimated and default is not None:
+        raise ValueError(f"default: an estimated parameter defaults to None ({where})")
+    bounds, closed = _interval(range, where) if range is not None else (None, (True, True))
+    info = ParameterInfo(
+        name="",
+        default=default,
+        help=help,
+        unit=unit,
+        range=bounds,
+        closed=closed,
+        estimated=estimated,
+        pooling=pooling,
+        static=static,
+        choices=tuple(choices) if choices is not None else None,
+        shape=shape,
+    )
+    if not static and converter is None:
+        converter = param
+    kw: dict[str, Any] = {} if default is dataclasses.MISSING else {"default": default}
+    return eqx.field(converter=converter, static=static, metadata={_META: info}, **kw)
 
 
 def as_float_image(rgb: ArrayLike, name: str = "rgb") -> Array:
@@ -180,6 +333,17 @@ class AbstractOperator(eqx.Module):
     """
 
     name: ClassVar[str] = ""
+    reference: ClassVar[str] = ""
+    """The paper (authors, year, title, venue) and its DOI where one exists."""
+    scale_invariant: ClassVar[bool] = False
+    """Whether ``op(k · rgb) == op(rgb)`` for every ``k > 0`` when the estimated parameters
+    are measured (and ``delta``, where there is one, is 0): the operator works on relative
+    luminance."""
+    per_channel: ClassVar[bool] = False
+    """Whether the curve maps R, G and B each by itself (no ``weights``); otherwise the
+    operator maps luminance with the ``weights`` of the image's primaries."""
+    default_fit_params: ClassVar[tuple[str, ...]] = ()
+    """What ``hdrjax fit`` fits when no ``--param`` is given."""
     only_feeds: ClassVar[dict[str, str]] = {}
     """Parameters whose only use is to estimate another one when that one is unset:
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
@@ -246,6 +410,13 @@ class AbstractOperator(eqx.Module):
                 v = float(v)
             out[f.name] = v
         return out
+
+    def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
+        """Pixels ``(rows, columns)`` a tile of an image of ``shape`` needs on each side to
+        be mapped as in the whole image: 0 for pointwise operators (the default); a
+        neighbourhood operator returns its reach."""
+        del shape
+        return 0, 0
 
 
 def stats_of(
@@ -317,7 +488,45 @@ def required_parameters(cls: type[AbstractOperator]) -> tuple[str, ...]:
     )
 
 
+def parameter_info(cls: type[AbstractOperator] | AbstractOperator) -> tuple[ParameterInfo, ...]:
+    """What an operator (class or instance) declares about each of its parameters, in
+    constructor order: help, unit, default, range, whether estimated, how it pools.
+
+    A field declared without :func:`parameter` (a plug-in's plain ``eqx.field``) gets its
+    help from the docstring's ``Attributes:`` section and no range.
+
+    >>> [p.name for p in parameter_info(get_operator("reinhard2002"))][:3]
+    ['key', 'L_white', 'log_average']
+    """
+    out = []
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        info = f.metadata.get(_META)
+        if info is None:
+            default = f.default
+            if default is dataclasses.MISSING and f.default_factory is not dataclasses.MISSING:
+                default = f.default_factory()
+            info = ParameterInfo(
+                name="",
+                default=default,
+                help=_docstring_help(cls, f.name),
+                static=bool(f.metadata.get("static", False)),
+                shape=None,
+            )
+        out.append(dataclasses.replace(info, name=f.name))
+    return tuple(out)
+
+
 def parameter_help(cls: type[AbstractOperator], name: str) -> str:
+    """The help text of parameter ``name`` (empty when it has none)."""
+    for info in parameter_info(cls):
+        if info.name == name:
+            return info.help
+    return ""
+
+
+def _docstring_help(cls: type[AbstractOperator] | AbstractOperator, name: str) -> str:
     """The description of parameter ``name`` in the ``Attributes:`` section of the
     operator's docstring, on one line (empty when it has none)."""
     doc = inspect.cleandoc(cls.__doc__ or "")
@@ -337,7 +546,9 @@ def make_operator(method: str, **params: Any) -> AbstractOperator:
 
     Raises:
         ValueError: an unknown ``method`` or parameter (the message lists the valid ones),
-            or a missing required parameter (named, with what it expects).
+            a missing required parameter (named, with what it expects), or a concrete
+            value outside the parameter's range (named, with the range; traced values
+            are not checked).
     """
     cls = get_operator(method)
     valid = parameter_names(cls)
@@ -355,6 +566,9 @@ def make_operator(method: str, **params: Any) -> AbstractOperator:
                 f"{name}: expected {what} (the {cls.name} operator needs it: it cannot be"
                 " estimated from the image), got none"
             )
+    for info in parameter_info(cls):
+        if info.name in params:
+            info.check(params[info.name], cls.name)
     return cls(**params)
 
 
@@ -404,6 +618,7 @@ def tonemap(
 
 __all__ = [
     "AbstractOperator",
+    "ParameterInfo",
     "Prepared",
     "count_valid",
     "dispatch",
@@ -412,6 +627,8 @@ __all__ = [
     "make_operator",
     "operator_names",
     "param",
+    "parameter",
+    "parameter_info",
     "prepare",
     "register",
     "safe_log",

@@ -15,6 +15,8 @@ colour-hdri documentation for the simple/normalisation/gamma/logarithmic/exponen
 operators.
 """
 
+from typing import Any, ClassVar
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -29,11 +31,33 @@ from ._base import (
     log_average,
     max_luminance,
     min_luminance,
-    param,
+    parameter,
     register,
     scale_by_luminance,
     weights_field,
 )
+
+BANTERLE2011 = (
+    "Banterle, Artusi, Debattista, Chalmers 2011, Advanced High Dynamic Range Imaging,"
+    " A K Peters/CRC Press (ISBN 978-1-56881-719-4), as colour-hdri implements it"
+)
+SCHLICK1994 = (
+    "Schlick 1994, Quantization techniques for visualization of high dynamic range"
+    " pictures, Photorealistic Rendering Techniques, https://doi.org/10.1007/978-3-642-87825-1_2"
+)
+
+
+def _l_max(unit: str = "image units") -> Any:
+    """The image's largest finite luminance, measured when ``None``."""
+    return parameter(
+        None,
+        help="luminance mapped to display white; None: the image's largest finite luminance",
+        unit=unit,
+        range="(0, inf)",
+        estimated=True,
+        pooling="max",
+    )
+
 
 EPSILON = float(jnp.finfo(jnp.float64).eps)
 """colour-hdri's ``EPSILON`` (float64 machine epsilon) inside its log-average."""
@@ -72,6 +96,9 @@ class _MaxNormalised(AbstractLuminanceCurve):
 class Simple(AbstractOperator):
     """``RGB / (RGB + 1)`` per channel (colour-hdri ``tonemapping_operator_simple``)."""
 
+    reference: ClassVar[str] = "colour-hdri's simple operator, RGB / (RGB + 1)"
+    per_channel: ClassVar[bool] = True
+
     def _measure(self, p: Prepared) -> "Simple":
         return self
 
@@ -84,7 +111,11 @@ class Simple(AbstractOperator):
 class Normalisation(_MaxNormalised):
     """``RGB / L_max`` (colour-hdri ``tonemapping_operator_normalisation``)."""
 
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = BANTERLE2011
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    L_max: Array | None = _l_max()
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
@@ -99,8 +130,13 @@ class Gamma(AbstractOperator):
     ``exp((EV ln 2 + ln RGB) / gamma)``; results beyond the float range saturate at the
     largest float (image gradients stay finite). Other pixels: colour-hdri's formula."""
 
-    gamma: Array = eqx.field(default=1.0, converter=param)
-    EV: Array = eqx.field(default=0.0, converter=param)
+    reference: ClassVar[str] = BANTERLE2011
+    per_channel: ClassVar[bool] = True
+
+    gamma: Array = parameter(1.0, help="gamma: the exponent is 1 / gamma", range="(0, inf)")
+    EV: Array = parameter(
+        0.0, help="exposure adjustment: RGB is multiplied by 2^EV", unit="EV", range="(-inf, inf)"
+    )
 
     def _measure(self, p: Prepared) -> "Gamma":
         return self
@@ -129,9 +165,14 @@ class Logarithmic(_MaxNormalised):
     Computed as ``ln(1 + q L) / ln(1 + k L_max)`` with ``log1p``: finite for images at any
     scale of the float type (``1 + k L_max`` rounds to 1 in a dim image)."""
 
-    q: Array = eqx.field(default=1.0, converter=param)
-    k: Array = eqx.field(default=1.0, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = BANTERLE2011
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    q: Array = parameter(1.0, help="scale of L inside the logarithm (brightness)", range="[1, inf)")
+    k: Array = parameter(
+        1.0, help="scale of L_max inside the logarithm (contrast)", range="[1, inf)"
+    )
+    L_max: Array | None = _l_max()
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
@@ -146,9 +187,20 @@ class Logarithmic(_MaxNormalised):
 class Exponential(AbstractLuminanceCurve):
     """``1 − exp(−q L / (k L_a))``, ``L_a`` the log-average (colour-hdri ``..._exponential``)."""
 
-    q: Array = eqx.field(default=1.0, converter=param)
-    k: Array = eqx.field(default=1.0, converter=param)
-    log_average: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = BANTERLE2011
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("log_average",)
+
+    q: Array = parameter(1.0, help="multiplier of L (brightness)", range="[1, inf)")
+    k: Array = parameter(1.0, help="multiplier of the log-average (darkens)", range="[1, inf)")
+    log_average: Array | None = parameter(
+        None,
+        help="log-average luminance L_a; None: measured (offset: float64 machine epsilon)",
+        unit="image units",
+        range="(0, inf)",
+        estimated=True,
+        pooling="log_mean",
+    )
     weights: tuple[float, float, float] = weights_field()
 
     def _measure(self, p: Prepared) -> "Exponential":
@@ -167,9 +219,12 @@ class Exponential(AbstractLuminanceCurve):
 class LogarithmicMapping(_MaxNormalised):
     """``(ln(1 + p L) / ln(1 + p L_max))^(1/q)`` (colour-hdri ``..._logarithmic_mapping``)."""
 
-    p: Array = eqx.field(default=1.0, converter=param)
-    q: Array = eqx.field(default=1.0, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = SCHLICK1994
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    p: Array = parameter(1.0, help="scale of L inside the logarithm", range="(0, inf)")
+    q: Array = parameter(1.0, help="the result is raised to 1 / q", range="(0, inf)")
+    L_max: Array | None = _l_max()
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
@@ -182,9 +237,13 @@ class LogarithmicMapping(_MaxNormalised):
 class ExponentiationMapping(_MaxNormalised):
     """``(L / L_max)^(p/q)`` (colour-hdri ``..._exponentiation_mapping``)."""
 
-    p: Array = eqx.field(default=1.0, converter=param)
-    q: Array = eqx.field(default=1.0, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = SCHLICK1994
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    p: Array = parameter(1.0, help="numerator of the exponent p / q", range="(0, inf)")
+    q: Array = parameter(1.0, help="denominator of the exponent p / q", range="(0, inf)")
+    L_max: Array | None = _l_max()
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
@@ -205,8 +264,14 @@ class Schlick1994(_MaxNormalised):
     overflowed to Inf in dim images and was flushed to 0 in bright ones.)
     """
 
-    p: Array = eqx.field(default=1.0, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = SCHLICK1994
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    p: Array = parameter(
+        1.0, help="slope of the curve at black (1: linear; Schlick's p >= 1)", range="[1, inf)"
+    )
+    L_max: Array | None = _l_max()
     weights: tuple[float, float, float] = weights_field()
 
     def _curve(self, L: Array) -> Array:
@@ -240,14 +305,50 @@ class Reinhard2004(AbstractOperator):
         channel_average, log_average, L_min, L_max: statistics; ``None`` → measured.
     """
 
-    f: Array = eqx.field(default=0.0, converter=param)
-    m: Array = eqx.field(default=0.3, converter=param)
-    a: Array = eqx.field(default=0.0, converter=param)
-    c: Array = eqx.field(default=0.0, converter=param)
-    channel_average: Array | None = eqx.field(default=None, converter=param)
-    log_average: Array | None = eqx.field(default=None, converter=param)
-    L_min: Array | None = eqx.field(default=None, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
+    reference: ClassVar[str] = (
+        "Reinhard, Devlin 2005, Dynamic range reduction inspired by photoreceptor"
+        " physiology, IEEE TVCG 11(1), https://doi.org/10.1109/TVCG.2005.9"
+    )
+
+    f: Array = parameter(0.0, help="intensity (brightness)", range="[-8, 8]")
+    m: Array = parameter(0.3, help="contrast 0.3 … 1; <= 0: automatic", range="(-inf, 1]")
+    a: Array = parameter(0.0, help="light adaptation (0: global, 1: per pixel)", range="[0, 1]")
+    c: Array = parameter(
+        0.0, help="chromatic adaptation (0: luminance, 1: per channel)", range="[0, 1]"
+    )
+    channel_average: Array | None = parameter(
+        None,
+        help="mean of each channel (R, G, B); None: measured",
+        unit="image units",
+        range="[0, inf)",
+        estimated=True,
+        pooling="mean",
+        shape=(3,),
+    )
+    log_average: Array | None = parameter(
+        None,
+        help="log-average luminance; None: measured (offset: float64 machine epsilon)",
+        unit="image units",
+        range="(0, inf)",
+        estimated=True,
+        pooling="log_mean",
+    )
+    L_min: Array | None = parameter(
+        None,
+        help="smallest luminance (automatic m); None: measured",
+        unit="image units",
+        range="[0, inf)",
+        estimated=True,
+        pooling="min",
+    )
+    L_max: Array | None = parameter(
+        None,
+        help="largest luminance (automatic m); None: measured",
+        unit="image units",
+        range="(0, inf)",
+        estimated=True,
+        pooling="max",
+    )
     weights: tuple[float, float, float] = weights_field()
 
     def _measure(self, p: Prepared) -> "Reinhard2004":
@@ -303,14 +404,25 @@ class Filmic(AbstractOperator):
     """Hable 2010 filmic curve per channel, normalised by its value at ``linear_whitepoint``
     (colour-hdri ``tonemapping_operator_filmic``; same parameter names and defaults)."""
 
-    shoulder_strength: Array = eqx.field(default=0.22, converter=param)
-    linear_strength: Array = eqx.field(default=0.3, converter=param)
-    linear_angle: Array = eqx.field(default=0.1, converter=param)
-    toe_strength: Array = eqx.field(default=0.2, converter=param)
-    toe_numerator: Array = eqx.field(default=0.01, converter=param)
-    toe_denominator: Array = eqx.field(default=0.3, converter=param)
-    exposure_bias: Array = eqx.field(default=2.0, converter=param)
-    linear_whitepoint: Array = eqx.field(default=11.2, converter=param)
+    reference: ClassVar[str] = (
+        "Hable 2010, Uncharted 2: HDR Lighting (Game Developers Conference) and Filmic"
+        " Tonemapping Operators, as colour-hdri implements it"
+    )
+    per_channel: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("exposure_bias",)
+
+    shoulder_strength: Array = parameter(0.22, help="shoulder strength A", range="[0, inf)")
+    linear_strength: Array = parameter(0.3, help="linear strength B", range="[0, inf)")
+    linear_angle: Array = parameter(0.1, help="linear angle C", range="[0, inf)")
+    toe_strength: Array = parameter(0.2, help="toe strength D", range="[0, inf)")
+    toe_numerator: Array = parameter(0.01, help="toe numerator E", range="[0, inf)")
+    toe_denominator: Array = parameter(0.3, help="toe denominator F", range="(0, inf)")
+    exposure_bias: Array = parameter(
+        2.0, help="multiplier of RGB before the curve", range="(0, inf)"
+    )
+    linear_whitepoint: Array = parameter(
+        11.2, help="input value mapped to display white", unit="image units", range="(0, inf)"
+    )
 
     def _measure(self, p: Prepared) -> "Filmic":
         return self

@@ -13,11 +13,17 @@ de Rousiers 2014; colour-hdri ``photometric_exposure_scale_factor_Lagarde2014``)
 import math
 from typing import ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
-from ._base import AbstractLuminanceCurve, Prepared, max_luminance, param, register, weights_field
+from ._base import (
+    AbstractLuminanceCurve,
+    Prepared,
+    max_luminance,
+    parameter,
+    register,
+    weights_field,
+)
 
 Q_FACTOR = (math.pi / 4.0) * 0.9 * 0.98 * math.cos(math.radians(10.0)) ** 4
 """ISO 12232 lens factor q with colour-hdri's defaults T = 0.9, v = 0.98, θ = 10° (0.6516)."""
@@ -51,12 +57,40 @@ class Linear(AbstractLuminanceCurve):
         ("exposure_time", "f_number", "iso", "ev100"), "L_max"
     )
 
-    L_max: Array | None = eqx.field(default=None, converter=param)
-    exposure_time: Array | None = eqx.field(default=None, converter=param)
-    f_number: Array | None = eqx.field(default=None, converter=param)
-    iso: Array | None = eqx.field(default=None, converter=param)
-    ev100: Array | None = eqx.field(default=None, converter=param)
-    q: float = eqx.field(static=True, default=Q_FACTOR)
+    reference: ClassVar[str] = (
+        "ISO 12232:2019 saturation-based speed; Lagarde, de Rousiers 2014, Moving Frostbite"
+        " to physically based rendering (SIGGRAPH course)"
+    )
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+
+    L_max: Array | None = parameter(
+        None,
+        help="luminance mapped to white; None: from the exposure settings, else the image's"
+        " largest finite luminance",
+        unit="image units (cd/m² for absolute images)",
+        range="(0, inf)",
+        estimated=True,
+        pooling="max",
+    )
+    exposure_time: Array | None = parameter(
+        None, help="exposure time (with f_number and iso)", unit="s", range="(0, inf)"
+    )
+    f_number: Array | None = parameter(
+        None, help="aperture N (with exposure_time and iso)", range="(0, inf)"
+    )
+    iso: Array | None = parameter(
+        None, help="ISO speed S (with exposure_time and f_number)", range="(0, inf)"
+    )
+    ev100: Array | None = parameter(
+        None,
+        help="exposure value at ISO 100: L_max = 78 / (100 q) 2^EV100",
+        unit="EV",
+        range="(-inf, inf)",
+    )
+    q: float = parameter(
+        Q_FACTOR, help="ISO 12232 lens factor q (T v cos⁴θ π / 4)", range="(0, inf)", static=True
+    )
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):

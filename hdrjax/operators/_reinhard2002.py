@@ -33,9 +33,8 @@ sides of the guard, and the fallback, in scaled units (the log-average becomes
 units coincide (``s = 1``) and is invariant under ``L → kL`` everywhere else.
 """
 
-from typing import Literal
+from typing import Any, ClassVar, Literal
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array
 
@@ -44,13 +43,85 @@ from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
 from ._base import (
     AbstractLuminanceCurve,
     Prepared,
-    param,
+    parameter,
     register,
     stats_of,
     weights_field,
 )
 
 KEY_DEFAULT = 0.18
+REFERENCE = (
+    "Reinhard, Stark, Shirley, Ferwerda 2002, Photographic tone reproduction for digital"
+    " images, ACM TOG 21(3), https://doi.org/10.1145/566654.566575; Reinhard 2002, Parameter"
+    " estimation for photographic tone reproduction, Journal of Graphics Tools 7(1),"
+    " https://doi.org/10.1080/10867651.2002.10487554"
+)
+
+
+def key_parameter() -> Any:
+    """The key ``a`` (JGT Eq. 4 when ``None``), shared by the Reinhard 2002 operators."""
+    return parameter(
+        None,
+        help="the key a (0.18 is the paper's default); None: JGT 2002 Eq. 4 estimate",
+        range="(0, inf)",
+        estimated=True,
+        pooling="log_mean",
+    )
+
+
+def white_parameter() -> Any:
+    """``L_white`` in scaled units (JGT Eq. 5 when ``None``)."""
+    return parameter(
+        None,
+        help="smallest scaled luminance mapped to white (inf: L / (1 + L)); None: JGT 2002 Eq. 5",
+        unit="scaled units",
+        range="(0, inf]",
+        estimated=True,
+        pooling="log_mean",
+    )
+
+
+def log_average_parameter() -> Any:
+    """The log-average ``L̄_w`` (measured with ``delta`` when ``None``)."""
+    return parameter(
+        None,
+        help="log-average luminance L̄_w; None: measured with delta",
+        unit="image units",
+        range="(0, inf)",
+        estimated=True,
+        pooling="log_mean",
+    )
+
+
+def delta_setting() -> Any:
+    """``delta``, the offset inside the log-average."""
+    return parameter(
+        DEFAULT_DELTA,
+        help="offset inside the log-average (1e-6, HDR Toolbox)",
+        unit="image units",
+        range="[0, inf)",
+        static=True,
+    )
+
+
+def percentile_method_setting() -> Any:
+    """``percentile_method``: histogram or exact percentiles."""
+    return parameter(
+        "histogram",
+        help="percentiles: histogram (fast, bounded error) or exact (sort)",
+        static=True,
+        choices=("histogram", "exact"),
+    )
+
+
+def bins_setting(default: int = DEFAULT_BINS) -> Any:
+    """``bins``: the histogram resolution of the percentiles."""
+    return parameter(
+        default,
+        help="histogram resolution of the percentiles (2^(ceil(log2 bins) - 3) bins per octave)",
+        range="[1, inf)",
+        static=True,
+    )
 
 
 def jgt_key(st: LuminanceStats) -> Array:
@@ -99,7 +170,8 @@ def reinhard_curve(L: Array, L_white: Array) -> Array:
 
 @register("reinhard2002")
 class Reinhard2002(AbstractLuminanceCurve):
-    """Reinhard et al. 2002 global photographic operator (see module docstring).
+    """Reinhard et al. 2002 global photographic operator, JGT 2002 automatic key and white
+    (module docstring).
 
     Input: linear RGB, relative or absolute (the operator is scale invariant when ``key``,
     ``L_white`` and ``log_average`` are measured). Output: display-referred linear RGB,
@@ -117,12 +189,16 @@ class Reinhard2002(AbstractLuminanceCurve):
         weights: luminance weights of the image's primaries (Rec.709 default).
     """
 
-    key: Array | None = eqx.field(default=None, converter=param)
-    L_white: Array | None = eqx.field(default=None, converter=param)
-    log_average: Array | None = eqx.field(default=None, converter=param)
-    delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
-    bins: int = eqx.field(static=True, default=DEFAULT_BINS)
+    reference: ClassVar[str] = REFERENCE
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("key", "L_white")
+
+    key: Array | None = key_parameter()
+    L_white: Array | None = white_parameter()
+    log_average: Array | None = log_average_parameter()
+    delta: float = delta_setting()
+    percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
+    bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
 
     def _stats_settings(self) -> tuple[str, int, float] | None:

@@ -16,7 +16,7 @@ neighbours. ``reinhard2002_auto`` applies the local operator when the image span
 """
 
 import math
-from typing import Literal
+from typing import ClassVar, Literal
 
 import equinox as eqx
 import jax
@@ -24,16 +24,25 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._scale import inverse_pow2, quotient
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA
 from ._base import (
     AbstractOperator,
     Prepared,
-    param,
+    parameter,
     register,
     stats_of,
     weights_field,
 )
-from ._reinhard2002 import Reinhard2002, jgt_key
+from ._reinhard2002 import (
+    REFERENCE,
+    Reinhard2002,
+    bins_setting,
+    delta_setting,
+    jgt_key,
+    key_parameter,
+    log_average_parameter,
+    percentile_method_setting,
+    white_parameter,
+)
 
 ALPHA1 = 1.0 / (2.0 * math.sqrt(2.0))
 AUTO_ZONES = 11.0
@@ -105,9 +114,25 @@ def local_adaptation(
     return jnp.maximum(jnp.take_along_axis(V1, m[None], axis=0)[0], 0.0)
 
 
+def _phi():
+    return parameter(
+        8.0,
+        help="sharpening φ (8, reference code; pfstmo's GUI uses 1)",
+        range="[0, inf)",
+        static=True,
+    )
+
+
+def _epsilon():
+    return parameter(
+        0.05, help="activity threshold ε of the scale selection", range="(0, inf)", static=True
+    )
+
+
 @register("reinhard2002_local")
 class Reinhard2002Local(AbstractOperator):
-    """Reinhard et al. 2002 local dodging-and-burning operator (module docstring).
+    """Reinhard et al. 2002 local dodging-and-burning operator, JGT 2002 automatic key
+    (module docstring).
 
     Input: linear RGB, relative or absolute. Output: display-referred linear RGB in [0, 1).
 
@@ -119,16 +144,28 @@ class Reinhard2002Local(AbstractOperator):
         s_low, s_high, num: the scale range and count (1, 43, 8).
     """
 
-    key: Array | None = eqx.field(default=None, converter=param)
-    log_average: Array | None = eqx.field(default=None, converter=param)
-    phi: float = eqx.field(static=True, default=8.0)
-    epsilon: float = eqx.field(static=True, default=0.05)
-    s_low: float = eqx.field(static=True, default=1.0)
-    s_high: float = eqx.field(static=True, default=43.0)
-    num: int = eqx.field(static=True, default=8)
-    delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
-    bins: int = eqx.field(static=True, default=DEFAULT_BINS)
+    reference: ClassVar[str] = REFERENCE
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("key",)
+
+    key: Array | None = key_parameter()
+    log_average: Array | None = log_average_parameter()
+    phi: float = _phi()
+    epsilon: float = _epsilon()
+    s_low: float = parameter(
+        1.0, help="smallest Gaussian scale s_1", unit="pixels", range="(0, inf)", static=True
+    )
+    s_high: float = parameter(
+        43.0,
+        help="largest Gaussian scale (exclusive)",
+        unit="pixels",
+        range="(0, inf)",
+        static=True,
+    )
+    num: int = parameter(8, help="number of scales", range="[2, inf)", static=True)
+    delta: float = delta_setting()
+    percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
+    bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
@@ -137,6 +174,13 @@ class Reinhard2002Local(AbstractOperator):
                 f"reinhard2002_local: need num >= 2 and 0 < s_low < s_high, got num={self.num},"
                 f" s_low={self.s_low}, s_high={self.s_high}"
             )
+
+    def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
+        """The radius of the largest Gaussian, ``ceil(4 s_max / (2√2))`` (39 pixels for the
+        default scales): a tile's responses then equal the whole image's."""
+        del shape
+        r = gaussian_radius(max(scales(self.s_low, self.s_high, self.num)))
+        return r, r
 
     def _measure(self, p: Prepared) -> "Reinhard2002Local":
         if not self.unset():
@@ -190,16 +234,30 @@ class Reinhard2002Auto(AbstractOperator):
     Attributes are those of :class:`Reinhard2002Local` plus ``L_white`` for the global one.
     """
 
-    key: Array | None = eqx.field(default=None, converter=param)
-    L_white: Array | None = eqx.field(default=None, converter=param)
-    log_average: Array | None = eqx.field(default=None, converter=param)
-    zones: float = eqx.field(static=True, default=AUTO_ZONES)
-    phi: float = eqx.field(static=True, default=8.0)
-    epsilon: float = eqx.field(static=True, default=0.05)
-    delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
-    percentile_method: Literal["histogram", "exact"] = eqx.field(static=True, default="histogram")
-    bins: int = eqx.field(static=True, default=DEFAULT_BINS)
+    reference: ClassVar[str] = REFERENCE
+    scale_invariant: ClassVar[bool] = True
+    default_fit_params: ClassVar[tuple[str, ...]] = ("key",)
+
+    key: Array | None = key_parameter()
+    L_white: Array | None = white_parameter()
+    log_average: Array | None = log_average_parameter()
+    zones: float = parameter(
+        AUTO_ZONES,
+        help="dynamic range above which the local operator runs (hdritools: 11)",
+        unit="stops",
+        range="[0, inf)",
+        static=True,
+    )
+    phi: float = _phi()
+    epsilon: float = _epsilon()
+    delta: float = delta_setting()
+    percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
+    bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
+
+    def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
+        """That of the local operator it may choose (default scales)."""
+        return Reinhard2002Local(phi=self.phi, epsilon=self.epsilon).halo(shape)
 
     def _measure(self, p: Prepared) -> "Reinhard2002Auto":
         return self  # each branch measures what it needs

@@ -19,12 +19,11 @@ import os
 import tempfile
 from typing import ClassVar, Literal
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ._base import AbstractLuminanceCurve, Prepared, register, weights_field
+from ._base import AbstractLuminanceCurve, Prepared, parameter, register, weights_field
 
 
 def _knots(x: ArrayLike) -> Array:
@@ -126,9 +125,33 @@ class Tabulated(AbstractLuminanceCurve):
         interpolation: ``"pchip"`` (monotone cubic in log L) or ``"linear"`` (in log L).
     """
 
-    luminance: Float[Array, " K"] = eqx.field(converter=_knots)
-    display: Float[Array, " K"] = eqx.field(converter=_knots)
-    interpolation: Literal["pchip", "linear"] = eqx.field(static=True, default="pchip")
+    reference: ClassVar[str] = (
+        "Fritsch, Carlson 1980, Monotone piecewise cubic interpolation, SIAM J. Numer. Anal."
+        " 17(2), https://doi.org/10.1137/0717021"
+    )
+
+    luminance: Float[Array, " K"] = parameter(
+        help="table luminances, strictly increasing, > 0; a CSV/JSON file on the command"
+        " line (--table)",
+        unit="image units",
+        range="(0, inf)",
+        shape=None,
+        converter=_knots,
+    )
+    display: Float[Array, " K"] = parameter(
+        help="display values, non-decreasing (nominally [0, 1]); differentiable, so the"
+        " knots can be fitted",
+        unit="display units",
+        range="[0, inf)",
+        shape=None,
+        converter=_knots,
+    )
+    interpolation: Literal["pchip", "linear"] = parameter(
+        "pchip",
+        help="pchip (monotone cubic in log L) or linear (in log L)",
+        static=True,
+        choices=("pchip", "linear"),
+    )
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):

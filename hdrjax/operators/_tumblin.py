@@ -32,7 +32,7 @@ from ._base import (
     count_valid,
     log_average,
     max_luminance,
-    param,
+    parameter,
     register,
     safe_log,
     stats_of,
@@ -41,6 +41,21 @@ from ._base import (
 from ._reinhard2002 import reinhard_curve
 
 STEVENS_EPS = 2.3e-5
+TUMBLIN1999 = (
+    "Tumblin, Hodgins, Guenter 1999, Two methods for display of high contrast images,"
+    " ACM TOG 18(1), https://doi.org/10.1145/300776.300783"
+)
+
+
+def _world_adaptation():
+    return parameter(
+        None,
+        help="world adaptation luminance; None: measured (adaptation)",
+        unit="cd/m²",
+        range="(0, inf)",
+        estimated=True,
+        pooling="log_mean",
+    )
 
 
 def stevens_gamma(L: Array) -> Array:
@@ -96,11 +111,31 @@ _ADAPT = ("log_average", "trimmed")
 class _AbstractTumblin(AbstractLuminanceCurve):
     """Settings shared by the two Tumblin–Rushmeier operators (display side and estimation)."""
 
-    L_da: Array = eqx.field(default=20.0, converter=param)
-    C_max: Array = eqx.field(default=100.0, converter=param)
-    adaptation: Literal["log_average", "trimmed"] = eqx.field(static=True, default="log_average")
-    gamma_log: Literal["ln", "log10"] = eqx.field(static=True, default="ln")
-    bins: int = eqx.field(static=True, default=8192)
+    reference: ClassVar[str] = TUMBLIN1999
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_wa",)
+
+    L_da: Array = parameter(
+        20.0, help="display adaptation luminance (10-30 typical)", unit="cd/m²", range="(0, inf)"
+    )
+    C_max: Array = parameter(100.0, help="display contrast L_max / L_min", range="[1, inf)")
+    adaptation: Literal["log_average", "trimmed"] = parameter(
+        "log_average",
+        help="how L_wa is measured: log_average, or trimmed (P1-P99 log-average)",
+        static=True,
+        choices=_ADAPT,
+    )
+    gamma_log: Literal["ln", "log10"] = parameter(
+        "ln",
+        help="logarithm in γ_wd's denominator: ln (colour-hdri, HDR Toolbox) or log10",
+        static=True,
+        choices=("ln", "log10"),
+    )
+    bins: int = parameter(
+        8192,
+        help="histogram resolution of the trimmed adaptation's percentiles",
+        range="[1, inf)",
+        static=True,
+    )
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
@@ -125,8 +160,12 @@ class Tumblin1999(_AbstractTumblin):
         L_wa: world adaptation luminance, cd/m²; ``None`` → measured (``adaptation``).
     """
 
-    L_max: Array = eqx.field(default=100.0, converter=param)
-    L_wa: Array | None = eqx.field(default=None, converter=param)
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_wa", "L_max")
+
+    L_max: Array = parameter(
+        100.0, help="display maximum luminance", unit="cd/m²", range="(0, inf)"
+    )
+    L_wa: Array | None = _world_adaptation()
 
     def _measure(self, p: Prepared) -> "Tumblin1999":
         if self.L_wa is not None:
@@ -141,7 +180,7 @@ class Tumblin1999(_AbstractTumblin):
 
 @register("tumblin_reinhard")
 class TumblinReinhard(_AbstractTumblin):
-    """The nonlinear operator of seed 000: formula 1 followed by Reinhard's formula 2.
+    """Birukov et al. 2022 nonlinear operator: formula 1 followed by Reinhard's formula 2.
 
     ``L_d = T(L_w) / L_dmax`` with ``T`` the revised Tumblin–Rushmeier curve (formula 1),
     then ``L_df = L_d (1 + L_d / L_white²) / (1 + L_d)`` (formula 2). The user controls the
@@ -165,10 +204,32 @@ class TumblinReinhard(_AbstractTumblin):
 
     only_feeds: ClassVar[dict[str, str]] = {"L_max": "L_white"}
 
-    L_wa: Array | None = eqx.field(default=None, converter=param)
-    L_max: Array | None = eqx.field(default=None, converter=param)
-    L_white: Array | None = eqx.field(default=None, converter=param)
-    L_dmax: Array = eqx.field(default=100.0, converter=param)
+    reference: ClassVar[str] = (
+        TUMBLIN1999 + "; Reinhard et al. 2002, https://doi.org/10.1145/566654.566575;"
+        " Birukov, Barladian, Denisov, Voloboy 2022, GraphiCon 2022"
+    )
+    default_fit_params: ClassVar[tuple[str, ...]] = ("L_wa", "L_white")
+
+    L_wa: Array | None = _world_adaptation()
+    L_max: Array | None = parameter(
+        None,
+        help="largest world luminance not clipped; None: the image maximum",
+        unit="cd/m²",
+        range="(0, inf)",
+        estimated=True,
+        pooling="max",
+    )
+    L_white: Array | None = parameter(
+        None,
+        help="formula 2's white; None: T(L_max) / L_dmax",
+        unit="display units",
+        range="(0, inf]",
+        estimated=True,
+        pooling="log_mean",
+    )
+    L_dmax: Array = parameter(
+        100.0, help="display maximum luminance", unit="cd/m²", range="(0, inf)"
+    )
 
     def _measure(self, p: Prepared) -> "TumblinReinhard":
         L_wa = self.L_wa

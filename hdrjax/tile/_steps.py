@@ -24,7 +24,7 @@ from ..filters import mean_filter, median_filter
 from ..filters._api import check_passes, check_size
 from ..operators._base import AbstractLuminanceCurve, AbstractOperator
 from ..operators._reinhard2002 import Reinhard2002, jgt_key, jgt_white
-from ..operators._reinhard2002_local import Reinhard2002Local, gaussian_radius, scales
+from ..operators._reinhard2002_local import Reinhard2002Local
 from ..vision._fft import fft_size, kernel_spectrum
 from ..vision._spencer1995 import Variant, apply_glare, glare_kernel, kernel_radius
 from ..vision._view import ResolvedView, View, resolve_view
@@ -205,11 +205,7 @@ class Tonemap(AbstractStep):
 
     def halo(self, shape):
         _check.shape(jax.ShapeDtypeStruct(tuple(shape), jnp.float32), "image", ndim=3)
-        op = self.operator
-        if isinstance(op, Reinhard2002Local):
-            r = gaussian_radius(max(scales(op.s_low, op.s_high, op.num)))
-            return r, r
-        return 0, 0
+        return self.operator.halo(tuple(shape))
 
     def bind(self, shape, stats):
         del shape

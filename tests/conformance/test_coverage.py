@@ -35,6 +35,9 @@ EXEMPT = {
     "hdrjax.tonemap": "dispatcher over the registry (tests/operators/test_conformance.py)",
     "hdrjax.operators.parameter_names": "registry metadata (tests/operators/test_conformance.py)",
     "hdrjax.operators.register": "registry decorator (every registered operator is tested)",
+    "hdrjax.operators.parameter": "field declaration (tests/operators/test_metadata.py)",
+    "hdrjax.operators.parameter_info": "registry metadata (tests/operators/test_metadata.py)",
+    "hdrjax.operators.ParameterInfo": "metadata record (tests/operators/test_metadata.py)",
     "hdrjax.operators.AbstractOperator": "abstract base: its subclasses are the registry",
     "hdrjax.operators.AbstractLuminanceCurve": "abstract base: its subclasses are the registry",
     # scalar camera formulas (exposure settings to luminance), no image input
