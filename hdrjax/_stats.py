@@ -637,20 +637,264 @@ def _kept_sum_jvp(assume_finite, primals, tangents):
 
 
 @jax.custom_jvp
-def _trimmed_log_mean(L: Array, p99: Array, estimate: Array) -> Array:
+def _band_log_mean(L: Array, lo: Array, hi: Array, estimate: Array) -> Array:
     """``estimate`` (the histogram's mean ``ln L`` of the kept pixels) with the derivative of
-    the plain formula ``mean(ln L | tiny ≤ L ≤ p99)`` in ``L``, as the exact pass gives."""
+    the plain formula ``mean(ln L | max(tiny, lo) ≤ L ≤ hi)`` in ``L``, as an exact pass
+    gives."""
     return jax.lax.stop_gradient(estimate)
 
 
-@_trimmed_log_mean.defjvp
-def _trimmed_log_mean_jvp(primals, tangents):
-    (L, p99, est), (t, _, _) = primals, tangents
+@_band_log_mean.defjvp
+def _band_log_mean_jvp(primals, tangents):
+    (L, lo, hi, est), (t, _, _, _) = primals, tangents
     tiny = jnp.finfo(L.dtype).tiny
-    kept = (L >= tiny) & (L <= p99)
+    kept = (L >= tiny) & (L >= lo) & (L <= hi)
     slope = jnp.where(L > tiny, 1.0, 0.5) / jnp.where(kept, L, 1.0)
     n = jnp.maximum(jnp.sum(kept), 1).astype(L.dtype)
-    return _trimmed_log_mean(L, p99, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
+    return _band_log_mean(L, lo, hi, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
+
+
+class Statistics(eqx.Module):
+    """Mergeable statistics of an image's luminance: what every automatic parameter is
+    computed from (:meth:`luminance_stats`), and what frames, tiles, chunks of pixels and
+    sequences combine exactly with :meth:`merge`.
+
+    Counts and sums add, extrema combine, and the histogram lies on the package's one
+    fixed grid (module docstring), so ``a.merge(b)`` of two parts of an image holds the
+    same counts, extrema and histogram as the statistics of the whole, and a log sum that
+    differs by float rounding. ``merge`` is associative and commutative.
+
+    Attributes:
+        n_pixels: pixels seen.
+        n_finite: pixels whose luminance is finite.
+        n_positive: finite pixels with luminance ``≥`` the smallest normal float.
+        min, max: extrema of the finite luminance (``±`` the largest float when none).
+        min_positive: smallest finite luminance ``≥`` tiny (the largest float when none).
+        log_sum: ``Σ ln(delta + max(L, 0))`` over the finite pixels.
+        counts: histogram of the positive pixels on the fixed grid (``m`` mantissa bits);
+            ``None`` for ``method="exact"``.
+        channel_sum: ``Σ RGB`` over the finite pixels (when asked for), else ``None``.
+        exact: ``(p01, p99, trimmed log-average)`` from a sort (``method="exact"``: these
+            do not merge), else ``None``.
+        source: the luminance image itself (statistics of one image, inside the operators)
+            so that the trimmed log-average has the derivative of its exact formula; merged
+            and public statistics drop it (that value is then a constant for ``jax.grad``,
+            as the histogram percentiles always are).
+        delta: the offset of the log sum (static).
+        m: histogram mantissa bits, ``None`` for the exact method (static).
+    """
+
+    n_pixels: Int[Array, ""]
+    n_finite: Int[Array, ""]
+    n_positive: Int[Array, ""]
+    min: Float[Array, ""]
+    max: Float[Array, ""]
+    min_positive: Float[Array, ""]
+    log_sum: Float[Array, ""]
+    counts: Int[Array, " G"] | None = None
+    channel_sum: Float[Array, " C"] | None = None
+    exact: Float[Array, " 3"] | None = None
+    source: Array | None = None
+    delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
+    m: int | None = eqx.field(static=True, default=None)
+
+    def merge(self, other: "Statistics") -> "Statistics":
+        """The statistics of both parts together (exact: counts, extrema and histogram;
+        the log sum to float rounding)."""
+        if not isinstance(other, Statistics):
+            raise ValueError(f"other: expected Statistics, got {type(other).__name__}")
+        if (self.delta, self.m) != (other.delta, other.m):
+            raise ValueError(
+                f"other: statistics measured with different settings (delta {self.delta} vs"
+                f" {other.delta}, histogram bits {self.m} vs {other.m})"
+            )
+        if self.exact is not None or other.exact is not None:
+            raise ValueError(
+                "other: percentile_method='exact' statistics do not merge (a sort of each"
+                " part); use percentile_method='histogram'"
+            )
+        if (self.channel_sum is None) != (other.channel_sum is None):
+            raise ValueError("other: one of the statistics has channel sums, the other not")
+        add = lambda a, b: None if a is None else a + b  # noqa: E731
+        return Statistics(
+            self.n_pixels + other.n_pixels,
+            self.n_finite + other.n_finite,
+            self.n_positive + other.n_positive,
+            jnp.minimum(self.min, other.min),
+            jnp.maximum(self.max, other.max),
+            jnp.minimum(self.min_positive, other.min_positive),
+            self.log_sum + other.log_sum,
+            add(self.counts, other.counts),
+            add(self.channel_sum, other.channel_sum),
+            None,
+            None,
+            self.delta,
+            self.m,
+        )
+
+    def without_source(self) -> "Statistics":
+        """The same statistics without the luminance image (small, to keep or return)."""
+        if self.source is None:
+            return self
+        return eqx.tree_at(lambda s: s.source, self, None)
+
+    @property
+    def channel_average(self) -> Array:
+        """Mean RGB over the finite pixels (statistics measured with channels)."""
+        if self.channel_sum is None:
+            raise ValueError("statistics: measured without channel sums (channels=True)")
+        return self.channel_sum / jnp.maximum(self.n_finite, 1).astype(self.channel_sum.dtype)
+
+    def band_log_average(self, q_lo: float = 0.01, q_hi: float = 0.99):
+        """``(exp(mean(ln L)), n_kept, p_lo, p_hi)`` over the positive pixels between the
+        ``q_lo`` and ``q_hi`` quantiles (fractions; histogram percentiles), 1 when no pixel
+        is kept. The statistics of one image (with ``source``) average its pixels in the
+        band exactly; merged ones estimate the mean from the histogram: each full bin at
+        its geometric centre, the boundary bins by the interpolated fraction of their
+        pixels (error in ``ln`` within half a bin plus the boundary bins' share, as the
+        trimmed log-average's, module docstring). Histogram statistics only."""
+        if self.counts is None:
+            raise ValueError("statistics: a band log-average needs histogram statistics")
+        return _band_log_average(self, q_lo, q_hi)
+
+    def luminance_stats(self) -> LuminanceStats:
+        """Percentiles, log-averages and extrema (:class:`LuminanceStats`) from these
+        statistics; histogram percentiles within ``rel_error_bound``."""
+        dt = self.min.dtype
+        any_finite = self.n_finite > 0
+        any_pos = self.n_positive > 0
+        lmin = jnp.where(any_finite, self.min, 0.0)
+        lmax = jnp.where(any_finite, self.max, 0.0)
+        minpos = jnp.where(any_pos, self.min_positive, 1.0)
+        # a mean of logarithms is at most ln(max); exp of its rounding may exceed the largest
+        # float (an image at float32's maximum): clamp, so the log-averages stay finite
+        ln_max = ln_max_of(dt)
+        n_fin = jnp.maximum(self.n_finite, 1).astype(dt)
+        log_avg = jnp.exp(jnp.minimum(self.log_sum / n_fin, ln_max))
+        if self.exact is not None:
+            p01, p99, trimmed = self.exact[0], self.exact[1], self.exact[2]
+            err = jnp.zeros((), dt)
+        else:
+            m = self.m
+            qs = jnp.array([0.01, 0.99], dt)
+            mx = jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)
+            (p01, p99), n_kept, kept_sum = _from_counts(
+                self.counts, qs, jax.lax.stop_gradient(minpos), jax.lax.stop_gradient(mx), m
+            )
+            p01 = jnp.where(any_pos, p01, 1.0)
+            p99 = jnp.where(any_pos, p99, 1.0)
+            err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
+            mean_ln = kept_sum / jnp.maximum(n_kept, 1e-30)
+            if self.source is not None:
+                zero = jnp.zeros((), dt)
+                mean_ln = _band_log_mean(self.source, zero, jax.lax.stop_gradient(p99), mean_ln)
+            else:
+                mean_ln = jax.lax.stop_gradient(mean_ln)
+            trimmed = jnp.exp(jnp.minimum(mean_ln, ln_max))
+            trimmed = jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
+        return LuminanceStats(
+            n_pixels=self.n_pixels,
+            n_nonfinite=self.n_pixels - self.n_finite,
+            n_positive=self.n_positive,
+            min=lmin,
+            min_positive=minpos,
+            max=lmax,
+            log_average=log_avg,
+            p01=p01,
+            p99=p99,
+            log_average_trimmed=trimmed,
+            rel_error_bound=err,
+        )
+
+
+def _band_log_average(st: Statistics, q_lo: float, q_hi: float):
+    """:meth:`Statistics.band_log_average` (histogram statistics)."""
+    dt = st.min.dtype
+    any_pos = st.n_positive > 0
+    lmax = jnp.where(st.n_finite > 0, st.max, 0.0)
+    minpos = jax.lax.stop_gradient(jnp.where(any_pos, st.min_positive, 1.0))
+    mx = jax.lax.stop_gradient(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0))
+    (p_lo, p_hi), n_hi, s_hi = _from_counts(
+        st.counts, jnp.array([q_lo, q_hi], dt), minpos, mx, st.m
+    )
+    _, n_lo, s_lo = _from_counts(st.counts, jnp.array([q_lo], dt), minpos, mx, st.m)
+    if st.source is not None:
+        # one image: the exact mean over its pixels in the band (a second pass)
+        L = st.source
+        keep = (L >= p_lo) & (L <= p_hi) & (L >= float(jnp.finfo(dt).tiny))  # NaN: False
+        n_kept = jnp.sum(keep)
+        lnL = jnp.log(jnp.where(keep, L, 1.0))
+        mean_ln = jnp.sum(jnp.where(keep, lnL, 0.0)) / jnp.maximum(n_kept, 1).astype(dt)
+    else:
+        n_kept = jnp.maximum(n_hi - n_lo, 0.0)
+        mean_ln = jax.lax.stop_gradient((s_hi - s_lo) / jnp.maximum(n_kept, 1e-30))
+    value = jnp.exp(jnp.minimum(mean_ln, ln_max_of(dt)))
+    ok = any_pos & (n_kept > 0)
+    p_lo, p_hi = jnp.where(any_pos, p_lo, 1.0), jnp.where(any_pos, p_hi, 1.0)
+    return jnp.where(ok, value, 1.0), n_kept, p_lo, p_hi
+
+
+def summarise(
+    L: Float[ArrayLike, "H W"],
+    *,
+    delta: float = DEFAULT_DELTA,
+    method: Literal["histogram", "exact"] = "histogram",
+    bins: int = DEFAULT_BINS,
+    assume_finite: bool = False,
+    keep_source: bool = True,
+) -> tuple[Array, Statistics]:
+    """``(finite, statistics)`` of one luminance image in one pass (module docstring,
+    "Speed"), ``finite`` telling whether every pixel is finite. With
+    ``assume_finite=True`` the statistics are those of a finite image (exact only when
+    ``finite`` is True) and ``finite`` is still measured. ``keep_source``: keep ``L`` in the
+    statistics for the trimmed log-average's exact derivative (one image, not merged)."""
+    _check.positive(delta, "delta", zero=True)
+    _check.integer(bins, "bins", 2)
+    _check.one_of(method, "method", ("histogram", "exact"))
+    _check.real(L, "L")
+    _check.nonempty(np.shape(L), "L", "(H, W)", (-2, -1))
+    L = _float(L)
+    m = mantissa_bits(bins) if method == "histogram" else None
+    n_fin, n_pos, lmin, lmax, minpos, log_sum, counts, finite = _summary(
+        L, bool(assume_finite), float(delta), m
+    )
+    if assume_finite:
+        # an image that is not finite after all gives meaningless sums and extrema (NaN or
+        # ±Inf), which its caller discards (``finite`` is False); they must still be finite
+        # values, or the derivative of what is computed from them (``exp`` of a NaN sum) is
+        # NaN, and a zero cotangent times NaN poisons every pixel's gradient in reverse mode
+        lmin, lmax, minpos, log_sum = (
+            jnp.where(finite, v, 1.0) for v in (lmin, lmax, minpos, log_sum)
+        )
+    exact = None
+    if m is None:
+        dt = L.dtype
+        any_pos = n_pos > 0
+        qs = jnp.array([0.01, 0.99], dt)
+        (p01, p99), _ = percentile(L, 100 * qs, method="exact")
+        p01 = jnp.where(any_pos, p01, 1.0)
+        p99 = jnp.where(any_pos, p99, 1.0)
+        n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
+        mean_ln = kept_sum / jnp.maximum(n_kept, 1).astype(dt)
+        trimmed = jnp.exp(jnp.minimum(mean_ln, ln_max_of(dt)))
+        trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
+        exact = jnp.stack([p01, p99, trimmed])
+    st = Statistics(
+        jnp.asarray(L.size, jnp.int32),
+        n_fin,
+        n_pos,
+        lmin,
+        lmax,
+        minpos,
+        log_sum,
+        counts if m is not None else None,
+        None,
+        exact,
+        L if keep_source and m is not None else None,
+        float(delta),
+        m,
+    )
+    return finite, st
 
 
 def measure(
@@ -670,7 +914,8 @@ def measure(
     One pass over ``L`` (module docstring, "Speed"): the fixed-grid histogram, from which
     come ``p01``, ``p99`` and the trimmed log-average, and the extrema and the log-average
     (a second, masked pass only for an image with NaN or ±Inf pixels;
-    ``method="exact"``: a sort and a pass over the pixels ``≤ p99``).
+    ``method="exact"``: a sort and a pass over the pixels ``≤ p99``). The same as
+    ``summarise(L)[1].luminance_stats()``.
     """
     return measure_checked(L, delta=delta, method=method, bins=bins, assume_finite=assume_finite)[1]
 
@@ -684,71 +929,17 @@ def measure_checked(
     assume_finite: bool = False,
 ) -> tuple[Array, LuminanceStats]:
     """``(finite, measure(L, ...))`` with ``finite`` whether every pixel of ``L`` is finite,
-    from the same pass (the operators decide their clean path on it, so the image is read
-    once for both). With ``assume_finite=True`` the statistics are those of a finite image
-    (exact only when ``finite`` is True) and ``finite`` is still measured."""
-    _check.positive(delta, "delta", zero=True)
-    _check.integer(bins, "bins", 2)
-    _check.one_of(method, "method", ("histogram", "exact"))
-    _check.real(L, "L")
-    _check.nonempty(np.shape(L), "L", "(H, W)", (-2, -1))
-    L = _float(L)
-    dt = L.dtype
-    n_pix = jnp.asarray(L.size, jnp.int32)
-    m = mantissa_bits(bins) if method == "histogram" else None
-    n_fin, n_pos, lmin, lmax, minpos, log_sum, counts, finite = _summary(
-        L, bool(assume_finite), float(delta), m
-    )
-    if assume_finite:
-        # an image that is not finite after all gives meaningless sums and extrema (NaN or
-        # ±Inf), which its caller discards (``finite`` is False); they must still be finite
-        # values, or the derivative of what is computed from them (``exp`` of a NaN sum) is
-        # NaN, and a zero cotangent times NaN poisons every pixel's gradient in reverse mode
-        lmin, lmax, minpos, log_sum = (
-            jnp.where(finite, v, 1.0) for v in (lmin, lmax, minpos, log_sum)
-        )
-    any_finite = n_fin > 0
-    any_pos = n_pos > 0
-    lmin = jnp.where(any_finite, lmin, 0.0)
-    lmax = jnp.where(any_finite, lmax, 0.0)
-    minpos = jnp.where(any_pos, minpos, 1.0)
-    # a mean of logarithms is at most ln(max); exp of its rounding may exceed the largest
-    # float (an image at float32's maximum): clamp, so the log-averages stay finite
-    ln_max = ln_max_of(dt)
-    log_avg = jnp.exp(jnp.minimum(log_sum / jnp.maximum(n_fin, 1).astype(dt), ln_max))
-    qs = jnp.array([0.01, 0.99], dt)
-    if m is None:
-        (p01, p99), err = percentile(L, 100 * qs, method="exact")
-        p01 = jnp.where(any_pos, p01, 1.0)
-        p99 = jnp.where(any_pos, p99, 1.0)
-        n_kept, kept_sum = _kept_sum(L, jax.lax.stop_gradient(p99), bool(assume_finite))
-        trimmed = jnp.exp(jnp.minimum(kept_sum / jnp.maximum(n_kept, 1).astype(dt), ln_max))
-        trimmed = jnp.where(n_kept > 0, trimmed, 1.0)
-    else:
-        mx = jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0)
-        (p01, p99), n_kept, kept_sum = _from_counts(
-            counts, qs, jax.lax.stop_gradient(minpos), jax.lax.stop_gradient(mx), m
-        )
-        p01 = jnp.where(any_pos, p01, 1.0)
-        p99 = jnp.where(any_pos, p99, 1.0)
-        err = jnp.where(any_pos, jnp.asarray(rel_error_bound(m, dt), dt), 0.0)
-        mean_ln = kept_sum / jnp.maximum(n_kept, 1e-30)
-        trimmed = _trimmed_log_mean(L, jax.lax.stop_gradient(p99), mean_ln)
-        trimmed = jnp.exp(jnp.minimum(trimmed, ln_max))
-        trimmed = jnp.where(any_pos & (n_kept > 0), trimmed, 1.0)
-    return finite, LuminanceStats(
-        n_pixels=n_pix,
-        n_nonfinite=n_pix - n_fin,
-        n_positive=n_pos,
-        min=lmin,
-        min_positive=minpos,
-        max=lmax,
-        log_average=log_avg,
-        p01=p01,
-        p99=p99,
-        log_average_trimmed=trimmed,
-        rel_error_bound=err,
-    )
+    from the same pass (:func:`summarise`)."""
+    finite, st = summarise(L, delta=delta, method=method, bins=bins, assume_finite=assume_finite)
+    return finite, st.luminance_stats()
 
 
-__all__ = ["DEFAULT_BINS", "DEFAULT_DELTA", "LuminanceStats", "measure", "percentile"]
+__all__ = [
+    "DEFAULT_BINS",
+    "DEFAULT_DELTA",
+    "LuminanceStats",
+    "Statistics",
+    "measure",
+    "percentile",
+    "summarise",
+]

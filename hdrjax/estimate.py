@@ -32,9 +32,9 @@ from . import _check
 from ._colour import REC709_WEIGHTS
 from ._stats import DEFAULT_BINS, DEFAULT_DELTA
 from .display._desaturate import PERCENT_ABOVE, THRESHOLD_FACTOR, threshold_and_l90
-from .operators._base import as_float_image, count_valid, dispatch, stats_of
+from .operators._base import as_float_image, count_valid, dispatch, statistics_of, stats_of
 from .operators._reinhard2002 import jgt_key as _jgt_key, jgt_white_terms
-from .operators._tumblin import STEVENS_EPS, adaptation_terms
+from .operators._tumblin import STEVENS_EPS, adaptation_settings, adaptation_terms
 
 
 class Estimate(eqx.Module):
@@ -203,7 +203,7 @@ def log_average(
 @functools.partial(jax.jit, static_argnums=(1, 2, 3))
 def _adaptation_impl(x, weights, method, bins):
     def fn(p):
-        value, terms = adaptation_terms(p, method, bins)
+        value, terms = adaptation_terms(statistics_of(p, adaptation_settings(bins)), method)
         if method == "log_average":
             terms = {"eps": jnp.asarray(STEVENS_EPS, x.dtype), **terms}
         return Estimate(

@@ -84,10 +84,8 @@ def run(args: argparse.Namespace) -> int:
         keep = [ln for ln in text[1:] if ln.split(":")[0].strip() in op.unset()]
         if keep:  # reinhard2002_auto measures in its branches: its choice is printed below
             print(f"  {op.name}: " + ", ".join(s.strip() for s in keep))
-    auto = get_operator("reinhard2002_auto")()
-    from ..operators._base import prepare
-
-    use_local = bool(jax.jit(lambda x: auto.use_local(prepare(x, wts)))(jnp.asarray(rgb)))
+    auto = get_operator("reinhard2002_auto")(weights=wts)
+    use_local = bool(auto.measure(jnp.asarray(rgb)).local)
     print(
         f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
         f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)"

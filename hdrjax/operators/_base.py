@@ -14,11 +14,12 @@ one whose luminance is -Inf or ≤ 0 is black. Statistics use finite pixels only
 
 import abc
 import dataclasses
+import functools
 import inspect
 import math
 import re
 from collections.abc import Callable
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar, NamedTuple, TypeVar
 
 import equinox as eqx
 import jax
@@ -29,7 +30,14 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
 from .._scale import ln_max
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, measure, measure_checked
+from .._stats import (
+    DEFAULT_BINS,
+    DEFAULT_DELTA,
+    LuminanceStats,
+    Statistics,
+    mantissa_bits,
+    summarise,
+)
 
 _Op = TypeVar("_Op", bound="AbstractOperator")
 
@@ -228,7 +236,7 @@ class Prepared(eqx.Module):
     has_nan: Array | None = None
     inf_sign: Array | None = None  # +1 where luminance is +Inf, -1 for -Inf, 0 otherwise
     clean: bool = eqx.field(static=True, default=False)
-    stats: LuminanceStats | None = None  # measured by :func:`dispatch` (``stats_key``)
+    stats: Statistics | None = None  # measured by :func:`dispatch` (``stats_key``)
     stats_key: tuple = eqx.field(static=True, default=())
 
     def valid(self) -> Array:
@@ -247,31 +255,46 @@ def prepare(rgb: Array, weights: tuple[float, float, float]) -> Prepared:
     return Prepared(safe, L, jnp.where(finite, L, jnp.nan), has_nan, inf_sign)
 
 
+class StatisticsSettings(NamedTuple):
+    """What an operator's :meth:`~AbstractOperator.bind` reads from statistics: the
+    percentile ``method``, histogram ``bins``, the ``delta`` of the log-average and whether
+    the per-channel sums are needed (``channels``). Statistics merge only with statistics
+    measured with the same settings."""
+
+    method: str = "histogram"
+    bins: int = DEFAULT_BINS
+    delta: float = DEFAULT_DELTA
+    channels: bool = False
+
+    @property
+    def key(self) -> tuple[str, int, float]:
+        return (self.method, int(self.bins), float(self.delta))
+
+
 def dispatch(
     rgb: Array,
     weights: tuple[float, float, float],
     fn: Callable,
     fix: bool,
-    stats: tuple[str, int, float] | None = None,
+    stats: StatisticsSettings | tuple | None = None,
 ):
     """Run ``fn(prepared)`` on the clean fast path when every luminance is finite, else on
     the masked path; ``fix`` puts NaN/Inf pixels back afterwards.
 
-    ``stats=(method, bins, delta)``: the operator will call :func:`stats_of` with these
-    settings; then the statistics pass itself tells whether the image is finite, and the
-    clean path reuses its result (the luminance is read once for both). Otherwise one
-    plain sum decides."""
+    ``stats``: the :class:`StatisticsSettings` the operator will read
+    (:func:`statistics_of`); then the statistics pass itself tells whether the image is
+    finite, and the clean path reuses its result (the luminance is read once for both).
+    Otherwise one plain sum decides."""
     L = luminance(rgb, weights)
-    if stats is None:
+    if stats is None or StatisticsSettings(*stats).method != "histogram":
+        # (the exact method sorts: only in the branch that needs it)
         finite, st, key = jnp.isfinite(jnp.sum(L)), None, ()
     else:
-        key = (stats[0], int(stats[1]), float(stats[2]))
+        key = StatisticsSettings(*stats).key
         # one luminance image for the statistics pass and the branches (XLA would
         # otherwise compute it twice, once per consumer's shape)
         L = jax.lax.optimization_barrier(L.reshape(-1)).reshape(L.shape)
-        finite, st = measure_checked(
-            L, method=key[0], bins=key[1], delta=key[2], assume_finite=True
-        )
+        finite, st = summarise(L, method=key[0], bins=key[1], delta=key[2], assume_finite=True)
 
     def clean(x, st):
         return fn(Prepared(x, L, L, clean=True, stats=st, stats_key=key))
@@ -349,9 +372,23 @@ class AbstractOperator(eqx.Module):
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
     the output (so a fit need not measure it). Parameters not listed count as used."""
 
-    @abc.abstractmethod
+    def statistics_settings(self) -> StatisticsSettings | None:
+        """The statistics :meth:`bind` reads (``None``, the default: none, e.g. when every
+        parameter is given)."""
+        return None
+
+    def bind(self: _Op, stats: Statistics | None) -> _Op:
+        """The operator with every unset (``None``) parameter computed from ``stats``
+        (:meth:`statistics` of an image, or merged statistics of several frames, tiles or
+        chunks): a pure function, differentiable in ``stats``. The default: nothing to
+        fill."""
+        del stats
+        return self
+
     def _measure(self: _Op, p: Prepared) -> _Op:
-        """Return a copy with every ``None`` parameter estimated from the image."""
+        """:meth:`bind` to the statistics of a prepared image (reusing those
+        :func:`dispatch` measured)."""
+        return self.bind(statistics_of(p, self.statistics_settings()))
 
     @abc.abstractmethod
     def _apply(self, p: Prepared) -> Array:
@@ -361,11 +398,18 @@ class AbstractOperator(eqx.Module):
     def weights_(self) -> tuple[float, float, float]:
         return getattr(self, "weights", REC709_WEIGHTS)
 
-    def _stats_settings(self) -> tuple[str, int, float] | None:
-        """``(method, bins, delta)`` of the :func:`stats_of` call :meth:`_measure` will
-        make, if any: :func:`dispatch` then measures them in the pass that checks the
-        image for NaN/Inf (default ``None``: no such call)."""
-        return None
+    def statistics(self, rgb: Float[ArrayLike, "H W 3"]) -> Statistics | None:
+        """Mergeable statistics of one image (``(H, W, 3)``) for :meth:`bind`: those of
+        several frames, tiles or chunks combine with :meth:`Statistics.merge`, and
+        ``op.bind(op.statistics(a).merge(op.statistics(b)))`` maps the two together as one
+        image. ``None`` when the operator needs none."""
+        rgb = as_float_image(rgb)
+        if rgb.ndim != 3:
+            raise ValueError(f"rgb: expected one image (H, W, 3), got shape {rgb.shape}")
+        settings = self.statistics_settings()
+        if settings is None:
+            return None
+        return _statistics_jit(rgb, self.weights_, StatisticsSettings(*settings))
 
     def measure(self: _Op, rgb: Float[ArrayLike, "H W 3"]) -> _Op:
         """The operator with every unset (``None``) parameter estimated from ``rgb``.
@@ -380,7 +424,9 @@ class AbstractOperator(eqx.Module):
             return self
         if not _traced(self, rgb):
             return _measure_jit(self, rgb)
-        return dispatch(rgb, self.weights_, self._measure, fix=False, stats=self._stats_settings())
+        return dispatch(
+            rgb, self.weights_, self._measure, fix=False, stats=self.statistics_settings()
+        )
 
     def __call__(self, rgb: Float[ArrayLike, "*batch H W 3"]) -> Float[Array, "*batch H W 3"]:
         rgb = as_float_image(rgb)
@@ -391,7 +437,7 @@ class AbstractOperator(eqx.Module):
         if rgb.ndim > 3:
             return jax.vmap(self.__call__)(rgb)
         run = lambda p: self._measure(p)._apply(p)  # noqa: E731
-        return dispatch(rgb, self.weights_, run, fix=True, stats=self._stats_settings())
+        return dispatch(rgb, self.weights_, run, fix=True, stats=self.statistics_settings())
 
     def unset(self) -> tuple[str, ...]:
         """Names of the parameters that will be measured from the image."""
@@ -419,6 +465,81 @@ class AbstractOperator(eqx.Module):
         return 0, 0
 
 
+def statistics_of(p: Prepared, settings: StatisticsSettings | tuple | None) -> Statistics | None:
+    """Statistics of a prepared image's finite pixels (those :func:`dispatch` measured with
+    the same settings are reused); ``channels``: with the per-channel sums."""
+    if settings is None:
+        return None
+    settings = StatisticsSettings(*settings)
+    method, bins, delta = settings.key
+    if p.stats is not None and p.stats_key == settings.key:
+        st = p.stats
+    else:
+        st = summarise(p.L_stats, delta=delta, method=method, bins=bins, assume_finite=p.clean)[1]  # type: ignore[arg-type]
+    if settings.channels:
+        st = eqx.tree_at(
+            lambda s: s.channel_sum, st, jnp.sum(p.rgb, axis=(-3, -2)), is_leaf=lambda x: x is None
+        )
+    return st
+
+
+def checked_statistics(op: "AbstractOperator", stats: Any) -> Statistics:
+    """``stats`` if it is what ``op.bind`` reads (:meth:`AbstractOperator.statistics` with
+    the operator's settings), else a ``ValueError`` naming what was expected."""
+    settings = op.statistics_settings()
+    if not isinstance(stats, Statistics):
+        raise ValueError(
+            f"stats: expected the Statistics of {op.name}.statistics(image), got"
+            f" {type(stats).__name__}"
+        )
+    if settings is not None:
+        s = StatisticsSettings(*settings)
+        m = mantissa_bits(s.bins) if s.method == "histogram" else None
+        if (stats.delta, stats.m) != (float(s.delta), m) or (
+            s.channels and stats.channel_sum is None
+        ):
+            raise ValueError(
+                f"stats: measured with other settings than {op.name}'s (delta {stats.delta},"
+                f" histogram bits {stats.m}; expected delta {float(s.delta)}, bits {m}"
+                f"{', channel sums' if s.channels else ''}): use {op.name}.statistics(image)"
+            )
+    return stats
+
+
+def bound_stats(op: "AbstractOperator", stats: Any) -> LuminanceStats:
+    """The luminance statistics (percentiles, log-averages, extrema) ``op.bind`` computes
+    its parameters from (:func:`checked_statistics`)."""
+    return checked_statistics(op, stats).luminance_stats()
+
+
+def fill(op: _Op, **values: Any) -> _Op:
+    """``op`` with the given parameters set (the one way operators bind measured values)."""
+    names = tuple(values)
+    return eqx.tree_at(
+        lambda o: tuple(getattr(o, n) for n in names),
+        op,
+        tuple(jnp.asarray(values[n]) for n in names),
+        is_leaf=lambda x: x is None,
+    )
+
+
+def rgb_statistics(
+    rgb: Array, weights: tuple[float, float, float], settings: StatisticsSettings
+) -> Statistics:
+    """:func:`statistics_of` an image (``(H, W, 3)``, traced or not), without its luminance
+    image (small, to merge or keep)."""
+
+    def fn(p):
+        return statistics_of(p, settings).without_source()
+
+    return dispatch(rgb, weights, fn, fix=False, stats=settings)
+
+
+@functools.partial(jax.jit, static_argnums=(1, 2))
+def _statistics_jit(rgb: Array, weights, settings) -> Statistics:
+    return rgb_statistics(rgb, weights, settings)
+
+
 def stats_of(
     p: Prepared,
     *,
@@ -426,18 +547,12 @@ def stats_of(
     bins: int = DEFAULT_BINS,
     delta: float = DEFAULT_DELTA,
 ) -> LuminanceStats:
-    """Statistics of a prepared image (its finite pixels); unused ones are removed by XLA.
-    ``delta`` is the offset inside the paper's log-average (:func:`hdrjax.stats.measure`).
-    Those :func:`dispatch` measured with the same settings are reused."""
-    if p.stats is not None and p.stats_key == (method, int(bins), float(delta)):
-        return p.stats
-    return measure(
-        p.L_stats,
-        delta=delta,
-        method=method,  # type: ignore[arg-type]
-        bins=bins,
-        assume_finite=p.clean,
-    )
+    """Luminance statistics of a prepared image (its finite pixels): percentiles,
+    log-averages, extrema (:meth:`Statistics.luminance_stats`); unused ones are removed by
+    XLA. ``delta`` is the offset inside the paper's log-average."""
+    st = statistics_of(p, StatisticsSettings(method, int(bins), float(delta)))
+    assert st is not None
+    return st.luminance_stats()
 
 
 # ----------------------------------------------------------------------------- registry
@@ -639,16 +754,9 @@ __all__ = [
 ]
 
 
-def max_luminance(p: Prepared) -> Array:
+def max_luminance(st: LuminanceStats) -> Array:
     """Largest finite luminance (1 when no pixel is positive, so it can divide)."""
-    m = jnp.max(p.L) if p.clean else jnp.max(jnp.where(p.valid(), p.L, -jnp.inf))
-    return jnp.where(jnp.isfinite(m) & (m > 0), m, 1.0)
-
-
-def min_luminance(p: Prepared) -> Array:
-    """Smallest finite luminance (0 when no pixel is finite)."""
-    m = jnp.min(p.L) if p.clean else jnp.min(jnp.where(p.valid(), p.L, jnp.inf))
-    return jnp.where(jnp.isfinite(m), m, 0.0)
+    return jnp.where(st.max > 0, st.max, 1.0)
 
 
 def count_valid(p: Prepared) -> Array:

@@ -17,20 +17,21 @@ operators.
 
 from typing import Any, ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
 from .._scale import divide, ln_max, quotient
+from .._stats import Statistics
 from ._base import (
     AbstractLuminanceCurve,
     AbstractOperator,
     Prepared,
-    count_valid,
-    log_average,
+    StatisticsSettings,
+    bound_stats,
+    checked_statistics,
+    fill,
     max_luminance,
-    min_luminance,
     parameter,
     register,
     scale_by_luminance,
@@ -63,17 +64,6 @@ EPSILON = float(jnp.finfo(jnp.float64).eps)
 """colour-hdri's ``EPSILON`` (float64 machine epsilon) inside its log-average."""
 
 
-def _set(op, **values):
-    """Copy of ``op`` with the given ``None`` fields replaced."""
-    names = tuple(values)
-    return eqx.tree_at(
-        lambda o: tuple(getattr(o, n) for n in names),
-        op,
-        tuple(values[n] for n in names),
-        is_leaf=lambda x: x is None,
-    )
-
-
 def _log1p_product(a: Array, x: Array) -> Array:
     """``ln(1 + a x)`` for ``a ≥ 1``, ``x ≥ 0``, without overflow when ``a x`` exceeds the
     float range: ``ln x + ln(a + 1/x)`` for ``x ≥ 1`` (gradient-safe on both sides)."""
@@ -86,10 +76,13 @@ def _log1p_product(a: Array, x: Array) -> Array:
 class _MaxNormalised(AbstractLuminanceCurve):
     """Operators whose only statistic is the largest luminance ``L_max``."""
 
-    def _measure(self, p: Prepared):
+    def statistics_settings(self) -> StatisticsSettings | None:
+        return None if self.L_max is not None else StatisticsSettings()
+
+    def bind(self, stats: Statistics | None):
         if self.L_max is not None:
             return self
-        return _set(self, L_max=max_luminance(p))
+        return fill(self, L_max=max_luminance(bound_stats(self, stats)))
 
 
 @register("simple")
@@ -98,9 +91,6 @@ class Simple(AbstractOperator):
 
     reference: ClassVar[str] = "colour-hdri's simple operator, RGB / (RGB + 1)"
     per_channel: ClassVar[bool] = True
-
-    def _measure(self, p: Prepared) -> "Simple":
-        return self
 
     def _apply(self, p: Prepared) -> Array:
         c = jnp.maximum(p.rgb, 0.0)
@@ -137,9 +127,6 @@ class Gamma(AbstractOperator):
     EV: Array = parameter(
         0.0, help="exposure adjustment: RGB is multiplied by 2^EV", unit="EV", range="(-inf, inf)"
     )
-
-    def _measure(self, p: Prepared) -> "Gamma":
-        return self
 
     def _apply(self, p: Prepared) -> Array:
         x = jnp.maximum(p.rgb, 0.0)
@@ -203,10 +190,13 @@ class Exponential(AbstractLuminanceCurve):
     )
     weights: tuple[float, float, float] = weights_field()
 
-    def _measure(self, p: Prepared) -> "Exponential":
+    def statistics_settings(self) -> StatisticsSettings | None:
+        return None if self.log_average is not None else StatisticsSettings(delta=EPSILON)
+
+    def bind(self, stats: Statistics | None) -> "Exponential":
         if self.log_average is not None:
             return self
-        return _set(self, log_average=log_average(p, EPSILON))
+        return fill(self, log_average=bound_stats(self, stats).log_average)
 
     def _curve(self, L: Array) -> Array:
         q, k = jnp.maximum(self.q, 1.0), jnp.maximum(self.k, 1.0)
@@ -351,17 +341,23 @@ class Reinhard2004(AbstractOperator):
     )
     weights: tuple[float, float, float] = weights_field()
 
-    def _measure(self, p: Prepared) -> "Reinhard2004":
-        missing = {}
-        if self.channel_average is None:
-            missing["channel_average"] = jnp.sum(p.rgb, axis=(0, 1)) / count_valid(p)
-        if self.log_average is None:
-            missing["log_average"] = log_average(p, EPSILON)
-        if self.L_min is None:
-            missing["L_min"] = min_luminance(p)
-        if self.L_max is None:
-            missing["L_max"] = max_luminance(p)
-        return _set(self, **missing) if missing else self
+    def statistics_settings(self) -> StatisticsSettings | None:
+        if not self.unset():
+            return None
+        return StatisticsSettings(delta=EPSILON, channels=self.channel_average is None)
+
+    def bind(self, stats: Statistics | None) -> "Reinhard2004":
+        if not self.unset():
+            return self
+        stats = checked_statistics(self, stats)
+        st = stats.luminance_stats()
+        measured = {
+            "channel_average": stats.channel_average if self.channel_average is None else None,
+            "log_average": st.log_average,
+            "L_min": st.min,
+            "L_max": max_luminance(st),
+        }
+        return fill(self, **{k: v for k, v in measured.items() if getattr(self, k) is None})
 
     def _apply(self, p: Prepared) -> Array:
         rgb = jnp.maximum(p.rgb, 0.0)
@@ -423,9 +419,6 @@ class Filmic(AbstractOperator):
     linear_whitepoint: Array = parameter(
         11.2, help="input value mapped to display white", unit="image units", range="(0, inf)"
     )
-
-    def _measure(self, p: Prepared) -> "Filmic":
-        return self
 
     def _apply(self, p: Prepared) -> Array:
         k = (

@@ -16,9 +16,11 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
+from .._stats import Statistics
 from ._base import (
     AbstractLuminanceCurve,
-    Prepared,
+    StatisticsSettings,
+    bound_stats,
     max_luminance,
     parameter,
     register,
@@ -53,16 +55,15 @@ class Linear(AbstractLuminanceCurve):
     in [0, 1] up to ``L_max`` (brighter pixels exceed 1 and clip when encoded).
     """
 
-    only_feeds: ClassVar[dict[str, str]] = dict.fromkeys(
-        ("exposure_time", "f_number", "iso", "ev100"), "L_max"
-    )
-
     reference: ClassVar[str] = (
         "ISO 12232:2019 saturation-based speed; Lagarde, de Rousiers 2014, Moving Frostbite"
         " to physically based rendering (SIGGRAPH course)"
     )
     scale_invariant: ClassVar[bool] = True
     default_fit_params: ClassVar[tuple[str, ...]] = ("L_max",)
+    only_feeds: ClassVar[dict[str, str]] = dict.fromkeys(
+        ("exposure_time", "f_number", "iso", "ev100"), "L_max"
+    )
 
     L_max: Array | None = parameter(
         None,
@@ -108,7 +109,11 @@ class Linear(AbstractLuminanceCurve):
         if len(given) > 1:
             raise ValueError(f"linear: give only one of L_max, ev100, exposure; got {given}")
 
-    def _measure(self, p: Prepared) -> "Linear":
+    def statistics_settings(self) -> StatisticsSettings | None:
+        given = (self.L_max, self.ev100, self.exposure_time)
+        return None if any(v is not None for v in given) else StatisticsSettings()
+
+    def bind(self, stats: Statistics | None) -> "Linear":
         if self.L_max is not None:
             return self
         if self.ev100 is not None:
@@ -116,7 +121,7 @@ class Linear(AbstractLuminanceCurve):
         elif self.exposure_time is not None:
             L_max = saturation_luminance(self.exposure_time, self.f_number, self.iso, self.q)
         else:
-            L_max = max_luminance(p)
+            L_max = max_luminance(bound_stats(self, stats))
         return Linear(L_max=L_max, q=self.q, weights=self.weights)
 
     def _curve(self, L: Array) -> Array:

@@ -39,13 +39,14 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._scale import scale
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
 from ._base import (
     AbstractLuminanceCurve,
-    Prepared,
+    StatisticsSettings,
+    bound_stats,
+    fill,
     parameter,
     register,
-    stats_of,
     weights_field,
 )
 
@@ -201,23 +202,21 @@ class Reinhard2002(AbstractLuminanceCurve):
     bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
 
-    def _stats_settings(self) -> tuple[str, int, float] | None:
-        if not self.unset() or self.percentile_method != "histogram":
-            return None  # the exact method sorts: only where the image needs it
-        return (self.percentile_method, self.bins, self.delta)
+    def statistics_settings(self) -> StatisticsSettings | None:
+        if not self.unset():
+            return None
+        return StatisticsSettings(self.percentile_method, self.bins, self.delta)
 
-    def _measure(self, p: Prepared) -> "Reinhard2002":
+    def bind(self, stats: Statistics | None) -> "Reinhard2002":
         if not self.unset():
             return self
-        st = stats_of(p, method=self.percentile_method, bins=self.bins, delta=self.delta)
+        st = bound_stats(self, stats)
         lbar = st.log_average if self.log_average is None else self.log_average
         key = jgt_key(st) if self.key is None else self.key
         white = self.L_white
         if white is None:
             white = jgt_white(st, key / lbar)
-        return Reinhard2002(
-            key, white, lbar, self.delta, self.percentile_method, self.bins, self.weights
-        )
+        return fill(self, key=key, L_white=white, log_average=lbar)
 
     def _curve(self, L: Array) -> Array:
         assert self.key is not None and self.L_white is not None

@@ -18,18 +18,20 @@ neighbours. ``reinhard2002_auto`` applies the local operator when the image span
 import math
 from typing import ClassVar, Literal
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._scale import inverse_pow2, quotient
+from .._stats import Statistics
 from ._base import (
     AbstractOperator,
     Prepared,
+    StatisticsSettings,
+    bound_stats,
+    fill,
     parameter,
     register,
-    stats_of,
     weights_field,
 )
 from ._reinhard2002 import (
@@ -182,15 +184,18 @@ class Reinhard2002Local(AbstractOperator):
         r = gaussian_radius(max(scales(self.s_low, self.s_high, self.num)))
         return r, r
 
-    def _measure(self, p: Prepared) -> "Reinhard2002Local":
+    def statistics_settings(self) -> StatisticsSettings | None:
+        if not self.unset():
+            return None
+        return StatisticsSettings(self.percentile_method, self.bins, self.delta)
+
+    def bind(self, stats: Statistics | None) -> "Reinhard2002Local":
         if not self.unset():
             return self
-        st = stats_of(p, method=self.percentile_method, bins=self.bins, delta=self.delta)
+        st = bound_stats(self, stats)
         key = jgt_key(st) if self.key is None else self.key
         lbar = st.log_average if self.log_average is None else self.log_average
-        return eqx.tree_at(
-            lambda o: (o.key, o.log_average), self, (key, lbar), is_leaf=lambda x: x is None
-        )
+        return fill(self, key=key, log_average=lbar)
 
     def _apply(self, p: Prepared) -> Array:
         assert self.key is not None and self.log_average is not None
@@ -231,7 +236,8 @@ class Reinhard2002Auto(AbstractOperator):
     """JGT 2002 automatic choice: local operator iff ``log2(L_max / L_min) > 11`` zones.
 
     Both branches use the JGT automatic key; the global branch also the JGT white point.
-    Attributes are those of :class:`Reinhard2002Local` plus ``L_white`` for the global one.
+    Attributes are those of :class:`Reinhard2002Local` plus ``L_white`` for the global one
+    and ``local``, the choice (measured: the image spans more than ``zones`` stops).
     """
 
     reference: ClassVar[str] = REFERENCE
@@ -254,19 +260,21 @@ class Reinhard2002Auto(AbstractOperator):
     percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
     bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
+    local: Array | None = parameter(
+        None,
+        help="1: the local operator, 0: the global one; None: the local one where the image"
+        " spans more than zones stops",
+        range="[0, 1]",
+        estimated=True,
+        pooling="max",
+    )
 
     def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
         """That of the local operator it may choose (default scales)."""
         return Reinhard2002Local(phi=self.phi, epsilon=self.epsilon).halo(shape)
 
-    def _measure(self, p: Prepared) -> "Reinhard2002Auto":
-        return self  # each branch measures what it needs
-
-    def use_local(self, p: Prepared) -> Array:
-        st = stats_of(p, method=self.percentile_method, bins=self.bins)
-        return (st.n_positive > 0) & (st.dynamic_range_stops > self.zones)
-
-    def _apply(self, p: Prepared) -> Array:
+    def branches(self) -> tuple[Reinhard2002Local, Reinhard2002]:
+        """The local and the global operator, with this operator's parameters."""
         common = dict(
             key=self.key,
             log_average=self.log_average,
@@ -276,12 +284,33 @@ class Reinhard2002Auto(AbstractOperator):
             weights=self.weights,
         )
         local = Reinhard2002Local(phi=self.phi, epsilon=self.epsilon, **common)
-        glob = Reinhard2002(L_white=self.L_white, **common)
+        return local, Reinhard2002(L_white=self.L_white, **common)
+
+    def statistics_settings(self) -> StatisticsSettings | None:
+        return StatisticsSettings(self.percentile_method, self.bins, self.delta)
+
+    def bind(self, stats: Statistics | None) -> "Reinhard2002Auto":
+        if self.local is not None and not self.unset():
+            return self
+        st = bound_stats(self, stats)
+        use = (st.n_positive > 0) & (st.dynamic_range_stops > self.zones)
+        if self.local is not None:
+            use = self.local
+        # both branches' automatic values: the key and log-average they share, the
+        # global one's white
+        glob = self.branches()[1].bind(stats)
+        return fill(
+            self,
+            key=glob.key,
+            L_white=glob.L_white,
+            log_average=glob.log_average,
+            local=use,
+        )
+
+    def _apply(self, p: Prepared) -> Array:
+        local, glob = self.branches()
         return jax.lax.cond(
-            self.use_local(p),
-            lambda q: local._measure(q)._apply(q),
-            lambda q: glob._measure(q)._apply(q),
-            p,
+            self.local > 0.5, lambda q: local._apply(q), lambda q: glob._apply(q), p
         )
 
 

@@ -21,21 +21,20 @@ than the paper's typesetting, which is unverified; with ``log10`` the denominato
 
 from typing import ClassVar, Literal
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._scale import divide
+from .._stats import Statistics
 from ._base import (
     AbstractLuminanceCurve,
-    Prepared,
-    count_valid,
-    log_average,
+    StatisticsSettings,
+    checked_statistics,
+    fill,
     max_luminance,
     parameter,
     register,
     safe_log,
-    stats_of,
     weights_field,
 )
 from ._reinhard2002 import reinhard_curve
@@ -82,27 +81,31 @@ def tumblin_curve(
     return m * L_da * powed
 
 
-def adaptation_terms(p: Prepared, method: str, bins: int) -> tuple[Array, dict[str, Array]]:
+def adaptation_terms(stats: Statistics, method: str) -> tuple[Array, dict[str, Array]]:
     """:func:`adaptation_luminance` and the statistics it used: ``n_pixels`` (the pixels
     averaged) and, for ``"trimmed"``, ``p01``/``p99`` (the kept range) and their
-    ``rel_error_bound`` (histogram percentiles)."""
+    ``rel_error_bound`` (histogram percentiles). ``stats``: measured with
+    ``delta=STEVENS_EPS`` (:func:`adaptation_settings`)."""
+    st = stats.luminance_stats()
     if method == "log_average":
-        return log_average(p, STEVENS_EPS), {"n_pixels": count_valid(p)}
-    st = stats_of(p, bins=bins)
-    keep = p.valid() & (p.L >= st.p01) & (p.L <= st.p99) & (p.L > 0)
-    lnL = safe_log(p.L)
-    n_kept = jnp.sum(keep)
-    n = jnp.maximum(n_kept, 1)
-    value = jnp.where(jnp.any(keep), jnp.exp(jnp.sum(jnp.where(keep, lnL, 0.0)) / n), 1.0)
-    terms = {"n_pixels": n_kept, "p01": st.p01, "p99": st.p99}
+        n = jnp.maximum(stats.n_finite, 1)
+        return st.log_average, {"n_pixels": n}
+    value, n_kept, p01, p99 = stats.band_log_average(0.01, 0.99)
+    terms = {"n_pixels": n_kept, "p01": p01, "p99": p99}
     return value, {**terms, "rel_error_bound": st.rel_error_bound}
 
 
-def adaptation_luminance(p: Prepared, method: str, bins: int) -> Array:
+def adaptation_settings(bins: int) -> StatisticsSettings:
+    """The statistics :func:`adaptation_terms` reads."""
+    return StatisticsSettings(bins=bins, delta=STEVENS_EPS)
+
+
+def adaptation_luminance(stats: Statistics, method: str) -> Array:
     """World adaptation luminance: ``exp(mean(ln(L + 2.3e-5)))`` over finite pixels
     (colour-hdri, HDR Toolbox), or ``"trimmed"``: the log-average of the positive pixels
-    between the 1st and 99th percentiles (robust to a few lamps or dark corners)."""
-    return adaptation_terms(p, method, bins)[0]
+    between the 1st and 99th percentiles (robust to a few lamps or dark corners), from the
+    histogram."""
+    return adaptation_terms(stats, method)[0]
 
 
 _ADAPT = ("log_average", "trimmed")
@@ -167,11 +170,14 @@ class Tumblin1999(_AbstractTumblin):
     )
     L_wa: Array | None = _world_adaptation()
 
-    def _measure(self, p: Prepared) -> "Tumblin1999":
+    def statistics_settings(self) -> StatisticsSettings | None:
+        return None if self.L_wa is not None else adaptation_settings(self.bins)
+
+    def bind(self, stats: Statistics | None) -> "Tumblin1999":
         if self.L_wa is not None:
             return self
-        L_wa = adaptation_luminance(p, self.adaptation, self.bins)
-        return eqx.tree_at(lambda o: o.L_wa, self, L_wa, is_leaf=lambda x: x is None)
+        stats = checked_statistics(self, stats)
+        return fill(self, L_wa=adaptation_luminance(stats, self.adaptation))
 
     def _curve(self, L: Array) -> Array:
         assert self.L_wa is not None
@@ -202,13 +208,12 @@ class TumblinReinhard(_AbstractTumblin):
         gamma_log: ``"ln"`` (default; see module docstring) or ``"log10"``.
     """
 
-    only_feeds: ClassVar[dict[str, str]] = {"L_max": "L_white"}
-
     reference: ClassVar[str] = (
         TUMBLIN1999 + "; Reinhard et al. 2002, https://doi.org/10.1145/566654.566575;"
         " Birukov, Barladian, Denisov, Voloboy 2022, GraphiCon 2022"
     )
     default_fit_params: ClassVar[tuple[str, ...]] = ("L_wa", "L_white")
+    only_feeds: ClassVar[dict[str, str]] = {"L_max": "L_white"}
 
     L_wa: Array | None = _world_adaptation()
     L_max: Array | None = parameter(
@@ -231,23 +236,26 @@ class TumblinReinhard(_AbstractTumblin):
         100.0, help="display maximum luminance", unit="cd/m²", range="(0, inf)"
     )
 
-    def _measure(self, p: Prepared) -> "TumblinReinhard":
-        L_wa = self.L_wa
-        if L_wa is None:
-            L_wa = adaptation_luminance(p, self.adaptation, self.bins)
-        L_max = self.L_max
-        if L_max is None:
-            L_max = max_luminance(p)
+    def statistics_settings(self) -> StatisticsSettings | None:
+        if self.L_wa is not None and self.L_max is not None:
+            return None  # (L_white follows from them)
+        return adaptation_settings(self.bins)
+
+    def bind(self, stats: Statistics | None) -> "TumblinReinhard":
+        if not self.unset():
+            return self
+        L_wa, L_max = self.L_wa, self.L_max
+        if L_wa is None or L_max is None:
+            stats = checked_statistics(self, stats)
+            if L_wa is None:
+                L_wa = adaptation_luminance(stats, self.adaptation)
+            if L_max is None:
+                L_max = max_luminance(stats.luminance_stats())
         L_white = self.L_white
         if L_white is None:
             t = tumblin_curve(L_max, L_wa, self.L_da, self.C_max, self.gamma_log) / self.L_dmax
             L_white = jnp.maximum(t, jnp.finfo(t.dtype).tiny)
-        return eqx.tree_at(
-            lambda o: (o.L_wa, o.L_max, o.L_white),
-            self,
-            (L_wa, L_max, L_white),
-            is_leaf=lambda x: x is None,
-        )
+        return fill(self, L_wa=L_wa, L_max=L_max, L_white=L_white)
 
     def _curve(self, L: Array) -> Array:
         assert self.L_wa is not None and self.L_white is not None

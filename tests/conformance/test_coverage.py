@@ -39,6 +39,9 @@ EXEMPT = {
     "hdrjax.operators.parameter_info": "registry metadata (tests/operators/test_metadata.py)",
     "hdrjax.operators.ParameterInfo": "metadata record (tests/operators/test_metadata.py)",
     "hdrjax.operators.AbstractOperator": "abstract base: its subclasses are the registry",
+    # mergeable statistics: merge and bind over the registry (tests/operators/test_statistics.py)
+    "hdrjax.stats.Statistics": "statistics record (tests/operators/test_statistics.py)",
+    "hdrjax.stats.summarise": "luminance statistics (tests/operators/test_statistics.py)",
     "hdrjax.operators.AbstractLuminanceCurve": "abstract base: its subclasses are the registry",
     # scalar camera formulas (exposure settings to luminance), no image input
     "hdrjax.operators.ev100_luminance": "tests/operators/test_linear_tabulated.py",

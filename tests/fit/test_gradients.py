@@ -98,8 +98,9 @@ CASES = [
     # > 11 zones: by default the local branch runs, which is reinhard2002_local's code)
     (
         "reinhard2002_auto",
-        dict(key=0.2, L_white=3.0, log_average=0.05, zones=1000.0),
-        ("key", "L_white", "log_average"),
+        # local=0: the global branch (the choice itself is a step: its derivative is 0)
+        dict(key=0.2, L_white=3.0, log_average=0.05, local=0.0),
+        ("key", "L_white", "log_average", "local"),
     ),
     ("reinhard2002_local", dict(key=0.2, log_average=0.05), ("key", "log_average")),
     ("reinhard2004", R2004, ("f", "m", "a", "c", "channel_average", "log_average")),
@@ -143,7 +144,7 @@ NO_PARAMETERS = ("simple",)  # RGB / (RGB + 1): nothing to differentiate
 
 def _case_id(case):
     name, values, _ = case
-    tags = {"zones": "global", "interpolation": "linear"}
+    tags = {"local": "global", "interpolation": "linear"}
     if name == "linear" or (name == "tumblin_reinhard" and "L_white" not in values):
         return f"{name}-{next(iter(values)) if name == 'linear' else 'L_max'}"
     if name == "reinhard2004" and values["m"] <= 0:
