@@ -4,6 +4,10 @@ Subcommands live in ``hdrjax/cli/_cmd_<name>.py``; each module defines
 ``register(subparsers)`` that adds its parser and sets ``func`` (a callable taking the parsed
 namespace and returning an exit code). Errors are one line naming the file or argument and
 the problem: exit code 2 for usage errors, 1 for bad data.
+
+Before parsing, the modules listed in the environment variable ``HDRJAX_PLUGINS``
+(comma-separated module names or ``.py`` file paths) are imported, so the operators they
+register with :func:`hdrjax.operators.register` work in every subcommand.
 """
 
 import argparse
@@ -15,7 +19,7 @@ import sys
 
 from ._common import CLIError, DataError, UsageError
 
-__all__ = ["CLIError", "DataError", "UsageError", "build_parser", "main"]
+__all__ = ["CLIError", "DataError", "UsageError", "build_parser", "load_plugins", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -57,7 +61,56 @@ def _enable_compilation_cache() -> None:
         pass  # an unwritable cache folder only costs compile time
 
 
+def load_plugins(spec: str) -> None:
+    """Import the plug-in modules ``spec`` lists (``HDRJAX_PLUGINS``): comma-separated
+    module names (``mypkg.operators``) or paths of ``.py`` files. A file is imported once
+    per process while it is unchanged. Raises :class:`UsageError` naming the first entry
+    that cannot be imported."""
+    for entry in (e.strip() for e in spec.split(",")):
+        if not entry:
+            continue
+        try:
+            if entry.endswith(".py") or os.sep in entry or "/" in entry:
+                _import_file(entry)
+            else:
+                importlib.import_module(entry)
+        except Exception as e:  # any failure of a plug-in's code is the user's to fix
+            raise UsageError(
+                f"HDRJAX_PLUGINS: cannot import {entry!r}: {type(e).__name__}: {_one_line(e)}"
+            ) from None
+
+
+def _import_file(path: str) -> None:
+    import hashlib
+    import importlib.util
+
+    full = os.path.realpath(path)
+    stamp = os.stat(full).st_mtime_ns  # FileNotFoundError names the path
+    stem = os.path.splitext(os.path.basename(full))[0]
+    digest = hashlib.sha1(full.encode()).hexdigest()[:8]
+    name = f"hdrjax_plugin_{''.join(c if c.isalnum() else '_' for c in stem)}_{digest}"
+    loaded = sys.modules.get(name)
+    if loaded is not None and getattr(loaded, "__hdrjax_plugin_stamp__", None) == stamp:
+        return
+    spec = importlib.util.spec_from_file_location(name, full)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"not a Python file: {path}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # dataclasses and pickling look classes up by module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    module.__hdrjax_plugin_stamp__ = stamp  # type: ignore[attr-defined]
+
+
 def main(argv: list[str] | None = None) -> int:
+    try:
+        load_plugins(os.environ.get("HDRJAX_PLUGINS", ""))
+    except UsageError as e:
+        print(f"hdrjax: error: {e}", file=sys.stderr)
+        return e.exit_code
     parser = build_parser()
     args = parser.parse_args(argv)
     _enable_compilation_cache()

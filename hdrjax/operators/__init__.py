@@ -6,9 +6,13 @@ encoding (:mod:`hdrjax.display`). Every operator works under ``jit``, ``vmap`` a
 """
 
 from ._base import (
+    ENTRY_POINT_GROUP as ENTRY_POINT_GROUP,
     AbstractLuminanceCurve as AbstractLuminanceCurve,
     AbstractOperator as AbstractOperator,
     ParameterInfo as ParameterInfo,
+    StatisticsSettings as StatisticsSettings,
+    bound_stats as bound_stats,
+    fill as fill,
     get_operator as get_operator,
     make_operator as make_operator,
     operator_names as operator_names,
@@ -17,6 +21,7 @@ from ._base import (
     parameter_names as parameter_names,
     register as register,
     tonemap as tonemap,
+    weights_field as weights_field,
 )
 from ._classic import (
     Exponential as Exponential,

@@ -558,16 +558,43 @@ def stats_of(
 # ----------------------------------------------------------------------------- registry
 
 _REGISTRY: dict[str, type[AbstractOperator]] = {}
+ENTRY_POINT_GROUP = "hdrjax.operators"
+"""The entry-point group through which installed packages contribute operators."""
+_entry_points_loaded = False
 
 
 def _key(name: str) -> str:
     return re.sub(r"[\s_\-]", "", name.lower())
 
 
+def _qualified(cls: type) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
 def register(name: str) -> Callable[[type[_Op]], type[_Op]]:
-    """Class decorator adding an operator to the registry under ``name``."""
+    """Class decorator adding an operator to the registry under ``name`` (looked up case-
+    and ``_``/``-`` insensitively), for the package's operators and plug-ins alike.
+
+    Raises:
+        ValueError: ``name`` is empty, the class is not an :class:`AbstractOperator`, or
+            the name is taken by a different class (the same class defined again, as when
+            its module is reloaded, replaces the old definition).
+    """
+    if not isinstance(name, str) or not _key(name):
+        raise ValueError(f"name: expected an operator name such as 'reinhard2002', got {name!r}")
 
     def deco(cls: type[_Op]) -> type[_Op]:
+        if not (isinstance(cls, type) and issubclass(cls, AbstractOperator)):
+            raise ValueError(
+                f"register({name!r}): expected a subclass of hdrjax.operators.AbstractOperator,"
+                f" got {cls!r}"
+            )
+        old = _REGISTRY.get(_key(name))
+        if old is not None and _qualified(old) != _qualified(cls):
+            raise ValueError(
+                f"name: {name!r} is already registered to {_qualified(old)}; register"
+                f" {_qualified(cls)} under another name"
+            )
         cls.name = name
         _REGISTRY[_key(name)] = cls
         return cls
@@ -575,13 +602,42 @@ def register(name: str) -> Callable[[type[_Op]], type[_Op]]:
     return deco
 
 
+def _load_entry_points() -> None:
+    """Import the operators installed packages declare in the entry-point group
+    ``hdrjax.operators`` (once, on the registry's first use). An entry point names a module
+    whose import registers its operators, or an operator class, registered under the entry
+    point's name unless its module registered it. A plug-in that fails to load is skipped
+    with one warning line naming it."""
+    global _entry_points_loaded
+    if _entry_points_loaded:
+        return
+    _entry_points_loaded = True  # first: a plug-in that lists the registry does not recurse
+    import importlib.metadata
+    import warnings
+
+    for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            obj = ep.load()
+            if isinstance(obj, type) and obj not in _REGISTRY.values():
+                register(ep.name)(obj)
+        except Exception as e:  # a broken plug-in must not break the package
+            text = " ".join(str(e).split()) or type(e).__name__
+            warnings.warn(
+                f"hdrjax operator plug-in {ep.name!r} ({ep.value}) not loaded: {text}",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+
+
 def operator_names() -> tuple[str, ...]:
-    """Registered operator names, sorted."""
+    """Registered operator names, sorted (the package's and the plug-ins')."""
+    _load_entry_points()
     return tuple(sorted(cls.name for cls in _REGISTRY.values()))
 
 
 def get_operator(name: str) -> type[AbstractOperator]:
     """The operator class registered under ``name`` (case and ``_``/``-`` insensitive)."""
+    _load_entry_points()
     try:
         return _REGISTRY[_key(name)]
     except KeyError:
@@ -608,7 +664,8 @@ def parameter_info(cls: type[AbstractOperator] | AbstractOperator) -> tuple[Para
     constructor order: help, unit, default, range, whether estimated, how it pools.
 
     A field declared without :func:`parameter` (a plug-in's plain ``eqx.field``) gets its
-    help from the docstring's ``Attributes:`` section and no range.
+    help from the docstring's ``Attributes:`` section, no range, and the shape of its
+    default when that is a number or a vector (``--set`` then takes it).
 
     >>> [p.name for p in parameter_info(get_operator("reinhard2002"))][:3]
     ['key', 'L_white', 'log_average']
@@ -627,10 +684,19 @@ def parameter_info(cls: type[AbstractOperator] | AbstractOperator) -> tuple[Para
                 default=default,
                 help=_docstring_help(cls, f.name),
                 static=bool(f.metadata.get("static", False)),
-                shape=None,
+                shape=_shape_of(default),
             )
         out.append(dataclasses.replace(info, name=f.name))
     return tuple(out)
+
+
+def _shape_of(default: Any) -> tuple[int, ...] | None:
+    """The shape of a plain field's default: ``()`` for a number, ``(n,)`` for a vector
+    array; ``None`` (unknown) otherwise, tuples (settings such as ``weights``) included."""
+    if isinstance(default, bool) or default is None or isinstance(default, (tuple, str)):
+        return None
+    shape = np.shape(default) if isinstance(default, (int, float, np.ndarray, jax.Array)) else None
+    return shape if shape is not None and len(shape) <= 1 else None
 
 
 def parameter_help(cls: type[AbstractOperator], name: str) -> str:
@@ -732,11 +798,15 @@ def tonemap(
 
 
 __all__ = [
+    "ENTRY_POINT_GROUP",
     "AbstractOperator",
     "ParameterInfo",
     "Prepared",
+    "StatisticsSettings",
+    "bound_stats",
     "count_valid",
     "dispatch",
+    "fill",
     "finish",
     "get_operator",
     "make_operator",
