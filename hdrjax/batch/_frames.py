@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import io as hio
 from ._pipeline import Pipeline, frame_is_clean, render_batch
-from ._sequence import measure_batch, merge_histograms, stack_operators
+from ._sequence import measure_batch, merge_statistics, stack_operators
 
 
 class FrameError(ValueError):
@@ -143,8 +143,9 @@ def measure_task(
     pooled: bool,
     allow_nan: bool,
 ) -> dict:
-    """Dask task: measure a chunk. Returns ``{"records": {index: record}, "hist": ...,
-    "failed": {index: message}}`` (the chunk's histograms already summed)."""
+    """Dask task: measure a chunk. Returns ``{"records": {index: record}, "stats": ...,
+    "failed": {index: message}}`` (the chunk's statistics already merged, ``None`` unless
+    ``pooled``)."""
     groups, failed = _groups(items, allow_nan)
     records: dict[int, dict] = {}
     for key, members in groups.items():
@@ -153,8 +154,8 @@ def measure_task(
             recs = measure_frames(pipeline, [m[1] for m in part], key, batch_size, pooled)
             for m, r in zip(part, recs, strict=True):
                 records[m[0][0]] = r
-    hist = merge_histograms(list(records.values())) if pooled else None
-    return {"records": records, "hist": hist, "failed": failed}
+    merged = merge_statistics(list(records.values())) if pooled else None
+    return {"records": records, "stats": merged, "failed": failed}
 
 
 def render_task(

@@ -33,6 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._stats import Statistics
 from ..io._atomic import remove_stale_temporaries
 from ._frames import (
     FrameError,
@@ -46,7 +47,7 @@ from ._frames import (
     write_frame,
 )
 from ._pipeline import Pipeline
-from ._sequence import merge_histograms, shared_values, smoothed_values
+from ._sequence import merge_statistics, shared_values, smoothed_values, statistics_settings
 
 Parameters = Literal["per-frame", "same", "smooth"]
 PARAMETER_MODES = ("per-frame", "same", "smooth")
@@ -212,9 +213,9 @@ def _measure_local(
     cache_bytes: int,
     keep: set[int],
     col: _Collector,
-) -> tuple[dict[int, dict], dict | None, dict[int, Any]]:
+) -> tuple[dict[int, dict], Statistics | None, dict[int, Any]]:
     records: dict[int, dict] = {}
-    hist = merge_histograms([]) if pooled else None
+    merged: list[Statistics | None] = [None]
     cache: dict[int, Any] = {}
     cached = 0
     buffers: dict[tuple, list] = {}
@@ -224,10 +225,7 @@ def _measure_local(
         recs = measure_frames(pipeline, [m[1] for m in members], key, batch_size, pooled)
         for m, r in zip(members, recs, strict=True):
             records[m[0].index] = r
-        if hist is not None:
-            part = merge_histograms(recs)
-            hist["counts"] += part["counts"]
-            hist["lnsum"] += part["lnsum"]
+        merged[0] = merge_statistics(recs, merged[0])
 
     for e, res in _reader(entries, allow_nan, readers, 2 * batch_size):
         if isinstance(res, FrameError):
@@ -243,7 +241,7 @@ def _measure_local(
             flush(key)
     for key in list(buffers):
         flush(key)
-    return records, hist, cache
+    return records, merged[0], cache
 
 
 def _render_local(
@@ -354,15 +352,13 @@ def _measure_dask(client, pipeline, entries, batch_size, pooled, allow_nan, retr
     futures = client.map(task, chunks, retries=retries, pure=False)
     by_index = {e.index: e for e in entries}
     records: dict[int, dict] = {}
-    hist = merge_histograms([]) if pooled else None
+    merged = None
     for res in client.gather(futures):
         records.update(res["records"])
         for i, msg in res["failed"].items():
             col.fail(by_index[i], msg, count=False)
-        if hist is not None and res["hist"] is not None:
-            hist["counts"] += res["hist"]["counts"]
-            hist["lnsum"] += res["hist"]["lnsum"]
-    return records, hist
+        merged = merge_statistics([{"stats": res["stats"]}], merged)
+    return records, merged
 
 
 def _render_dask(client, pipeline, entries, values, batch_size, allow_nan, retries, col):
@@ -391,14 +387,15 @@ def _values_for(
     pipeline: Pipeline,
     parameters: str,
     records: dict[int, dict],
-    hist: dict | None,
+    merged: Statistics | None,
     smooth_frames: float,
 ) -> dict[int, dict]:
     order = sorted(records)
     recs = [records[i] for i in order]
     if parameters == "same":
-        assert hist is not None
-        shared = shared_values(pipeline.operator, recs, hist)
+        if not order:
+            return {}
+        shared = shared_values(pipeline.operator, merged)
         return {i: shared for i in order}
     smoothed = smoothed_values(pipeline.operator, recs, smooth_frames)
     return dict(zip(order, smoothed, strict=True))
@@ -474,6 +471,8 @@ def run(
         raise ValueError(f"workers: expected an integer >= 1, got {workers!r}")
     if not isinstance(pipeline, Pipeline):
         pipeline = Pipeline(pipeline)
+    if parameters == "same":
+        statistics_settings(pipeline.operator, pooled=True)  # statistics that merge
     batch_size = int(batch_size)
     out = Path(out_dir)
     entries = _entries(expand_paths(paths), out, pipeline.extension)
@@ -502,11 +501,11 @@ def run(
         cache: dict[int, Any] = {}
         if sequence and todo:
             if dask:
-                records, hist = _measure_dask(
+                records, merged = _measure_dask(
                     client, pipeline, entries, batch_size, pooled, allow_nan, retries, col
                 )
             else:
-                records, hist, cache = _measure_local(
+                records, merged, cache = _measure_local(
                     pipeline,
                     entries,
                     batch_size,
@@ -517,7 +516,7 @@ def run(
                     {e.index for e in todo},
                     col,
                 )
-            values = _values_for(pipeline, parameters, records, hist, smooth_frames)
+            values = _values_for(pipeline, parameters, records, merged, smooth_frames)
             gone = set(col.failed)
             for e in todo:
                 if e.index in gone:

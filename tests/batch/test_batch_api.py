@@ -95,7 +95,6 @@ def test_same_parameters_pool_every_pixel_of_the_sequence(seq, tmp_path):
 
 def test_pooled_statistics_match_numpy(seq):
     from hdrjax.batch._frames import measure_frames
-    from hdrjax.batch._sequence import merge_histograms
 
     pipe = batch.Pipeline("reinhard2002")
     frames = [frame(i) for i in range(6)]
@@ -103,7 +102,7 @@ def test_pooled_statistics_match_numpy(seq):
     # two batches of 4 (the second padded), as run() does
     recs = measure_frames(pipe, frames[:4], key, 4, True)
     recs += measure_frames(pipe, frames[4:], key, 4, True)
-    st = batch.pooled_stats([r["stats"] for r in recs], merge_histograms(recs))
+    st = batch.pooled_stats([r["stats"] for r in recs])
     L = np.concatenate([(f.astype(np.float64) @ W709).ravel() for f in frames])
     Lp = L[L > 0]
     p01, p99 = np.percentile(Lp, [1, 99], method="lower")  # order statistics

@@ -90,7 +90,7 @@ EXEMPT = {
     "hdrjax.batch.BatchSummary": "result container of run (tests/batch/test_batch_api.py)",
     "hdrjax.batch.Step": "pipeline step description (tests/batch/test_batch_api.py)",
     "hdrjax.batch.step": "pipeline step constructor (tests/batch/test_batch_api.py)",
-    "hdrjax.batch.pooled_stats": "pools per-frame statistics dicts (tests/batch/test_batch_api.py)",
+    "hdrjax.batch.pooled_stats": "merges per-frame Statistics (tests/batch/test_batch_api.py)",
     "hdrjax.batch.smooth_series": "1-D series smoothing (tests/batch/test_batch_api.py)",
     # tile: apply of every step and statistics are cases (== the whole-image functions);
     # the dask graph builders need a scheduler (tests/tile/test_dask.py)
