@@ -1,11 +1,11 @@
 """Plug-in operators (issue 17.4): the example of docs/operators.md, read from the page's
 code block (so the page and this test cannot drift) and written to a file outside the
 package, works through ``HDRJAX_PLUGINS`` on the command line (``tonemap --set``,
-``fit --param``, ``operators NAME``, ``batch`` with shared parameters), the Python API
-(``tonemap``, ``fit``, ``study.sweep``) and the ``hdrjax.operators`` entry-point group;
-``register`` refuses a name taken by another class. In-process ``main`` calls on 8×8
-images; the registry is restored after each test, so other tests' registry iteration
-does not see the plug-in."""
+``fit --param``, ``operators NAME``, ``batch`` with shared and smoothed parameters), the
+Python API (``tonemap``, ``fit``, ``study.sweep``, ``tile``) and the ``hdrjax.operators``
+entry-point group; ``register`` refuses a name taken by another class. In-process ``main``
+calls on 8×8 images; the registry is restored after each test, so other tests' registry
+iteration does not see the plug-in."""
 
 import dataclasses
 import importlib.metadata
@@ -150,6 +150,34 @@ def test_plugin_batch_shares_the_pooled_log_average(plugin, tmp_path):
     for name, k in (("in", 1), ("in2", 4)):
         got = hio.read(out / f"{name}.pfm").rgb()
         np.testing.assert_allclose(got, _reference(k * rgb, 0.3, pooled), rtol=RTOL, err_msg=name)
+
+
+def test_plugin_batch_smooths_the_log_average_over_time(plugin, tmp_path):
+    """``--smooth``: each frame's log-average smoothed as its ``pooling="log_mean"``
+    declares, a centred exponential moving average of ``ln L̄_w`` (time constant 1 frame)."""
+    _, src, rgb = plugin
+    hio.write(tmp_path / "in2.pfm", 4 * rgb)
+    frames = [str(src / "in.pfm"), str(tmp_path / "in2.pfm")]
+    out = tmp_path / "batch"
+    argv = ["batch", *frames, "-o", str(out), "--method", NAME, "--format", "pfm"]
+    assert main([*argv, "--smooth", "--smooth-frames", "1", "--set", "key=0.3"]) == 0
+    L = rgb.astype(np.float64) @ WEIGHTS
+    ln_avg = np.array([np.mean(np.log(k * L + 1e-6)) for k in (1, 4)])
+    w = np.exp(-np.abs(np.subtract.outer(np.arange(2), np.arange(2))))
+    smoothed = np.exp(w @ ln_avg / w.sum(axis=1))
+    for name, k, avg in (("in", 1, smoothed[0]), ("in2", 4, smoothed[1])):
+        got = hio.read(out / f"{name}.pfm").rgb()
+        np.testing.assert_allclose(got, _reference(k * rgb, 0.3, avg), rtol=RTOL, err_msg=name)
+
+
+def test_plugin_through_tiles(plugin):
+    """``hdrjax.tile`` maps the plug-in tile by tile with the log-average of the merged
+    tile statistics: the whole image's result."""
+    path, _, rgb = plugin
+    hdrjax.cli.load_plugins(str(path))
+    op = hdrjax.make_operator(NAME, key=0.3)
+    got = hdrjax.tile.apply(hdrjax.tile.Tonemap(op), rgb, tile=4)
+    np.testing.assert_allclose(got, _reference(rgb, 0.3), rtol=RTOL)
 
 
 def test_plugin_study_sweep(plugin):
