@@ -806,6 +806,31 @@ class Statistics(eqx.Module):
             rel_error_bound=err,
         )
 
+    def quantile(self, q: Float[ArrayLike, "*Q"]) -> tuple[Float[Array, "*Q"], Float[Array, ""]]:
+        """Quantiles ``q`` (fractions in [0, 1]) of the positive pixels, from the histogram.
+
+        The values :func:`percentile` gives for ``100 q`` from the same pixels (rank
+        ``q (n_positive − 1)``, interpolated in ``ln L`` inside the bin that holds it,
+        clipped to ``[min_positive, max]``), but from statistics that may be merged, with no
+        further pass over the pixels. ``q`` may be traced (a rank computed from the counts).
+        Constants for ``jax.grad``.
+
+        Returns:
+            ``(values, rel_error_bound)``; values are NaN when no pixel is positive.
+        """
+        if self.counts is None:
+            raise ValueError("statistics: quantiles need histogram statistics")
+        _check.in_range(q, "q", 0, 1)
+        dt = self.min.dtype
+        any_pos = self.n_positive > 0
+        lmax = jnp.where(self.n_finite > 0, self.max, 0.0)
+        minpos = jax.lax.stop_gradient(jnp.where(any_pos, self.min_positive, 1.0))
+        mx = jax.lax.stop_gradient(jnp.where(any_pos, jnp.maximum(lmax, minpos), 1.0))
+        qs = jnp.asarray(q, dt)
+        vals = _from_counts(self.counts, qs.reshape(-1), minpos, mx, self.m)[0].reshape(qs.shape)
+        err = jnp.asarray(rel_error_bound(self.m, dt), dt)
+        return jnp.where(any_pos, vals, jnp.nan), jnp.where(any_pos, err, 0.0)
+
 
 def _band_log_average(st: Statistics, q_lo: float, q_hi: float):
     """:meth:`Statistics.band_log_average` (histogram statistics)."""
@@ -934,6 +959,41 @@ def measure_checked(
     return finite, st.luminance_stats()
 
 
+def summarise_histogram(
+    L: Float[ArrayLike, "H W"], *, bins: int = DEFAULT_BINS
+) -> tuple[Array, Statistics]:
+    """``(finite, statistics)`` of one luminance image from :func:`summarise`'s single pass
+    without its log sum, for callers that need only the histogram, the counts and the
+    extrema (the logarithm of every pixel is the pass's most expensive step; module
+    docstring, "Speed").
+
+    The statistics are exact when ``finite`` is True (every pixel finite); otherwise only
+    the histogram is (its grid has no bin for NaN or ±Inf) and the rest is meaningless, as
+    with ``summarise(L, assume_finite=True)``. ``log_sum`` is NaN (so are log-averages
+    computed from it); ``n_positive`` is counted on the histogram; no ``source`` is kept.
+    Constants for ``jax.grad``.
+    """
+    _check.integer(bins, "bins", 2)
+    _check.real(L, "L")
+    _check.nonempty(np.shape(L), "L", "(H, W)", (-2, -1))
+    L = _float(L)
+    m = mantissa_bits(bins)
+    counts, lmin, lmax, minpos, _, f = _one_pass(L, m, None)
+    n = jnp.asarray(L.size, jnp.int32)
+    return jnp.isfinite(f), Statistics(
+        n_pixels=n,
+        n_finite=n,
+        n_positive=_positive_count(counts, m),
+        min=lmin,
+        max=lmax,
+        min_positive=minpos,
+        log_sum=jnp.full((), jnp.nan, L.dtype),
+        counts=counts,
+        delta=DEFAULT_DELTA,
+        m=m,
+    )
+
+
 __all__ = [
     "DEFAULT_BINS",
     "DEFAULT_DELTA",
@@ -942,4 +1002,5 @@ __all__ = [
     "measure",
     "percentile",
     "summarise",
+    "summarise_histogram",
 ]

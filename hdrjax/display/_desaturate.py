@@ -29,7 +29,7 @@ function is plain arithmetic on linear RGB and can also run on display-referred 
 
 Speed (automatic threshold, histogram): one pass over the luminance gives the histogram
 for ``L₉₀``, ``L_max`` and the test that every pixel is finite
-(:func:`hdrjax._stats._one_pass`), then one fused loop reads RGB, recomputes the luminance
+(:func:`hdrjax._stats.summarise_histogram`), then one fused loop reads RGB, recomputes the luminance
 and the mean and writes the output (reading a luminance image back would cost ~30 % more
 at 4096²). Images with NaN or ±Inf pixels, the exact method and a manual threshold take the
 masked path.
@@ -53,16 +53,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import _check
 from .._colour import luminance
 from .._scale import inverse_pow2
-from .._stats import (
-    DEFAULT_BINS,
-    _from_counts,
-    _histogram_percentiles,
-    _one_pass,
-    _positive_count,
-    _positive_range,
-    mantissa_bits,
-    percentile,
-)
+from .._stats import DEFAULT_BINS, Statistics, percentile, summarise, summarise_histogram
 from ..operators._base import as_float_image
 
 PERCENT_ABOVE = 10.0
@@ -103,38 +94,44 @@ def _threshold_of(L90: Array) -> Array:
     return jnp.minimum(THRESHOLD_FACTOR * L90, jnp.finfo(L90.dtype).max)
 
 
+def _statistics(L: Array, finite: Array | None, bins: int) -> Statistics:
+    """The statistics of the finite pixels of one image (``finite``: their mask, ``None``
+    when every pixel is: the clean branch of :func:`_clean_or_masked`, which needs no mask
+    and no log sum)."""
+    if finite is None:
+        return summarise_histogram(L, bins=bins)[1]
+    return summarise(jnp.where(finite, L, jnp.nan), bins=bins, keep_source=False)[1]
+
+
+def _l90(st: Statistics, L: Array, finite: Array | None, method: str) -> tuple[Array, Array]:
+    """``(L₉₀, rel_error_bound)`` from the statistics ``st`` of the finite pixels of one
+    image, the exact method from a sort of ``L`` (``finite``: the mask, as above)."""
+    rank_pos, q = _rank_q(st.n_finite, st.n_positive, L.dtype)
+    if method == "exact":
+        value, err = percentile(L, 100.0 * q, method="exact", where=finite)
+    else:
+        value, err = st.quantile(q)
+    # the 90th percentile lies among the non-positive pixels: the threshold is 0
+    return jnp.where((st.n_positive > 0) & (rank_pos >= 0), value, 0.0), err
+
+
 def _threshold_one(
     L: Array, finite: Array | None, method: str, bins: int
 ) -> tuple[Array, Array, Array]:
     """``(T, L₉₀, rel_error_bound)``: ``L₉₀`` the luminance exceeded by 10 % of the finite
     pixels of one image (``finite``: their mask, ``None`` when every pixel is)."""
-    # finite is None: the clean branch of _clean_or_masked, every pixel is finite
-    n_finite, n_pos, lo, hi = _positive_range(L, finite, known_finite=finite is None)
-    rank_pos, q = _rank_q(n_finite, n_pos, L.dtype)
-    if method == "exact":
-        value, err = percentile(L, 100.0 * q, method="exact", where=finite)
-    else:
-        value, err = _histogram_percentiles(L, finite, n_pos, lo, hi, q[None], bins)
-        value = value[0]
-    # the 90th percentile lies among the non-positive pixels: the threshold is 0
-    value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
+    value, err = _l90(_statistics(L, finite, bins), L, finite, method)
     return _threshold_of(value), value, err
 
 
 def _one_pass_threshold(L: Array, bins: int) -> tuple[Array, Array, Array]:
     """``(finite, threshold, L_max)`` of a whole image in one pass over its luminance
-    (:func:`hdrjax._stats._one_pass`: the fixed-grid histogram and the extrema together);
-    the threshold and ``L_max`` are those of :func:`_threshold_one` and of the mapping when
-    ``finite`` (every pixel finite), meaningless otherwise."""
-    m = mantissa_bits(bins)
-    counts, _, lmax, minpos, _, f = _one_pass(L, m, None)
-    n_pos = _positive_count(counts, m)
-    rank_pos, q = _rank_q(jnp.asarray(L.size, jnp.int32), n_pos, L.dtype)
-    hi = jnp.where(n_pos > 0, lmax, 1.0)
-    lo = jnp.where(n_pos > 0, minpos, 1.0)
-    value = _from_counts(counts, q[None], lo, jnp.maximum(hi, lo), m)[0][0]
-    value = jnp.where((n_pos > 0) & (rank_pos >= 0), value, 0.0)
-    return jnp.isfinite(f), _threshold_of(value), lmax
+    (:func:`hdrjax._stats.summarise_histogram`: the fixed-grid histogram and the extrema
+    together); the threshold and ``L_max`` are those of :func:`_threshold_one` and of the
+    mapping when ``finite`` (every pixel finite), meaningless otherwise."""
+    finite, st = summarise_histogram(L, bins=bins)
+    value = _l90(st, L, None, "histogram")[0]
+    return finite, _threshold_of(value), st.max
 
 
 def highlight_threshold(

@@ -20,11 +20,6 @@ ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 # with the one mergeable statistics implementation. An entry that no longer occurs fails
 # (remove it).
 KNOWN_PRIVATE = {
-    ("hdrjax.display._desaturate", "hdrjax._stats._from_counts"),
-    ("hdrjax.display._desaturate", "hdrjax._stats._histogram_percentiles"),
-    ("hdrjax.display._desaturate", "hdrjax._stats._one_pass"),
-    ("hdrjax.display._desaturate", "hdrjax._stats._positive_count"),
-    ("hdrjax.display._desaturate", "hdrjax._stats._positive_range"),
     ("hdrjax.tile._stats", "hdrjax._stats._from_counts"),
     ("hdrjax.tile._stats", "hdrjax._stats._histogram"),
 }

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import hdrjax
-from hdrjax._stats import measure, percentile
+from hdrjax._stats import measure, percentile, summarise, summarise_histogram
 from hdrjax.display import encode, gamma_encode, quantize, srgb_decode, srgb_encode
 
 from ..tile.test_stats import trimmed_log_bound
@@ -58,6 +58,49 @@ def test_percentiles_at_the_float_maximum():
     # a constant image: min = max = the float maximum, exact
     const, _ = percentile(np.full(10, big, np.float32), q)
     np.testing.assert_array_equal(const, [big, big, big])
+
+
+def test_quantiles_of_merged_statistics_and_the_single_pass():
+    """``Statistics.quantile``: the histogram percentiles of the pixels the statistics saw,
+    from merged parts as from the whole (same counts and extrema), without a pass; and
+    ``summarise_histogram`` (desaturation's single pass): ``summarise`` without the log sum
+    for a finite image, a NaN pixel reported by ``finite``."""
+    L = np.random.default_rng(5).lognormal(0, 3, (8, 8)).astype(np.float32)
+    L[0, :3] = [0.0, -1.0, np.nan]  # not positive / not finite: left out
+    q = np.array([0.0, 0.1, 0.5, 0.9, 1.0], np.float32)
+
+    @jax.jit  # one program (eager statistics compile every step)
+    def stats(L):
+        whole = summarise(L)[1].without_source()
+        merged = summarise(L[:4])[1].merge(summarise(L[4:])[1])
+        finite, single = summarise_histogram(L)
+        quantiles = (whole.quantile(q), merged.quantile(q), single.quantile(q)[0])
+        return quantiles, merged.quantile(0.5)[0], percentile(L, 100 * q), whole, finite, single
+
+    ((got, err), (got_m, err_m), _), one, (want, bound), _, finite, _ = stats(L)
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(got_m, want)
+    assert float(err) == float(err_m) == float(bound) == 2.0**-10
+    # against NumPy's order statistics of the 61 positive pixels, within the bound
+    pos = L[np.isfinite(L) & (L > 0)].astype(np.float64)
+    lower = np.percentile(pos, 100 * q, method="lower")
+    assert np.all(np.abs(np.asarray(want) / lower - 1) <= 2.0**-10 + 1e-6)
+    assert one.shape == () and float(one) == float(want[2])  # a scalar q gives a scalar
+    assert not bool(finite)
+    # a finite image: the single pass holds summarise's counts, extrema and histogram
+    L[0, 2] = 2.0
+    (_, _, got_1), _, (want, _), ref, finite, st = stats(L)
+    assert bool(finite)
+    for f in ("n_pixels", "n_finite", "n_positive", "min", "max", "min_positive", "counts"):
+        np.testing.assert_array_equal(getattr(st, f), getattr(ref, f), err_msg=f)
+    assert np.isnan(float(st.log_sum)) and st.source is None and st.m == ref.m
+    np.testing.assert_array_equal(got_1, want)
+    ((none, err0), *_), *_ = stats(np.zeros((8, 8), np.float32))  # no positive pixel
+    assert np.isnan(np.asarray(none)).all() and float(err0) == 0.0
+    with pytest.raises(ValueError, match="^statistics: quantiles need histogram"):
+        jax.eval_shape(lambda L: summarise(L, method="exact")[1].quantile(q), L)
+    with pytest.raises(ValueError, match="^q: expected numbers in"):
+        jax.eval_shape(lambda L: summarise(L)[1].quantile(50.0), L)
 
 
 def test_measure_against_numpy(x64):
