@@ -135,7 +135,7 @@ def in_process(img: np.ndarray) -> tuple[np.ndarray, dict]:
     out = T.apply(T.Median(5), img, tile=TILE)
     times["median_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    st = T.statistics(out, tile=TILE)
+    st = T.operator_statistics(Reinhard2002(), out, tile=TILE)
     times["stats_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     T.apply(T.Tonemap(Reinhard2002()), out, tile=TILE, stats=st, out=out)
@@ -155,7 +155,7 @@ def with_dask(n: int, path: str) -> dict:
     wait(med)
     times["median_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    st = T.dask_statistics(med)
+    st = T.dask_operator_statistics(Reinhard2002(), med)
     times["stats_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     res = T.to_dask(T.Tonemap(Reinhard2002()), med, stats=st)

@@ -4,8 +4,10 @@ Numeric contract: float images ``(H, W)`` or channels-last ``(H, W, C)``, any un
 steps' own). :func:`apply` runs a step in-process, one window at a time, into a
 preallocated (or memory-mapped) array; :func:`to_dask` builds the same computation as a
 ``dask.array.map_overlap`` graph for a cluster. Steps that need global image statistics
-(Reinhard's key, white and log-average) take them from a first pass, :func:`statistics` /
-:func:`dask_statistics`, which equals :func:`hdrjax._stats.measure` on the whole image.
+(Reinhard's key, white and log-average) bind the whole image's statistics, merged from the
+tiles' (:func:`operator_statistics`: ``op.statistics(image)`` tile by tile);
+:func:`statistics` / :func:`dask_statistics` summarise them as
+:func:`hdrjax._stats.measure` does on the whole image.
 
 Results equal the whole-image computation: bit for bit for :class:`Median` and
 :class:`Mean`; to float rounding for :class:`Glare` with a truncated PSF and for
@@ -15,8 +17,17 @@ threshold). See :mod:`._layout` for the window geometry that makes this hold at 
 edges.
 """
 
-from ._apply import DEFAULT_TILE as DEFAULT_TILE, apply as apply, statistics as statistics
-from ._dask import dask_statistics as dask_statistics, to_dask as to_dask
+from ._apply import (
+    DEFAULT_TILE as DEFAULT_TILE,
+    apply as apply,
+    operator_statistics as operator_statistics,
+    statistics as statistics,
+)
+from ._dask import (
+    dask_operator_statistics as dask_operator_statistics,
+    dask_statistics as dask_statistics,
+    to_dask as to_dask,
+)
 from ._steps import (
     TILE_MODES as TILE_MODES,
     AbstractStep as AbstractStep,
@@ -37,7 +48,9 @@ __all__ = [
     "Neighbourhood",
     "Tonemap",
     "apply",
+    "dask_operator_statistics",
     "dask_statistics",
+    "operator_statistics",
     "statistics",
     "to_dask",
 ]

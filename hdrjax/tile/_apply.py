@@ -6,9 +6,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _check
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
+from ..operators._base import AbstractOperator, StatisticsSettings
 from ._layout import Span, check_tile, spans
-from ._stats import measure_blocks, numpy_runner, stats_dtype
+from ._stats import merge_blocks, numpy_runner, stats_dtype, summary
 from ._steps import AbstractStep, Glare
 
 DEFAULT_TILE = (1024, 1024)
@@ -55,6 +56,22 @@ def _blocks(image, tile) -> Iterator[np.ndarray]:
         yield block
 
 
+def _merged(image, tile, weights, settings) -> tuple[Statistics, float]:
+    """The whole image's :class:`~hdrjax._stats.Statistics`, merged from its tiles', and
+    their log sum in float64."""
+    shape = check_image(image)
+    check_tile(tile)
+    if len(shape) == 3 and shape[-1] not in (1, 3):
+        raise ValueError(f"image: expected 1 or 3 channels, got shape {shape}")
+    return merge_blocks(
+        numpy_runner(lambda: _blocks(image, tile)),
+        shape[0] * shape[1],
+        np.asarray(image[:1, :1]).dtype,
+        weights=weights,
+        settings=settings,
+    )
+
+
 def statistics(
     image,
     *,
@@ -77,21 +94,41 @@ def statistics(
     Returns:
         The :class:`~hdrjax._stats.LuminanceStats` that ``measure`` returns for the whole
         image's luminance: counts, extrema, ``p01``, ``p99`` and their error bound
-        identical; the two log-averages to float32 rounding (see :mod:`._stats`).
+        identical; the two log-averages to float32 rounding (see :mod:`._stats`). They are
+        the tiles' merged :class:`~hdrjax._stats.Statistics`
+        (:func:`operator_statistics`), summarised.
     """
+    if isinstance(bins, bool) or int(bins) != bins or bins < 2:
+        raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
+    settings = StatisticsSettings("histogram", int(bins), float(delta))
+    return summary(_merged(image, tile, weights, settings))
+
+
+def operator_statistics(
+    op: AbstractOperator, image, *, tile: int | Sequence[int] = DEFAULT_TILE
+) -> Statistics | None:
+    """``op.statistics(image)`` computed tile by tile: the tiles' statistics merged
+    (:meth:`Statistics.merge <hdrjax._stats.Statistics.merge>`), for ``apply(Tonemap(op),
+    image, stats=...)`` or ``op.bind``; ``None`` when the operator needs none.
+
+    Args:
+        op: any hdrjax operator.
+        image: ``(H, W, 3)`` linear RGB (any array NumPy can slice).
+        tile: tile size (rows, columns), or one integer for square tiles.
+
+    Returns:
+        Counts, extrema and histogram equal to ``op.statistics(image)``'s; the log sum to
+        float32 rounding (a float64 sum of the tiles' sums).
+    """
+    if not isinstance(op, AbstractOperator):
+        raise ValueError(f"op: expected an hdrjax operator, got {type(op).__name__}")
+    settings = op.statistics_settings()
+    if settings is None:
+        return None
     shape = check_image(image)
-    check_tile(tile)
-    if len(shape) == 3 and shape[-1] not in (1, 3):
-        raise ValueError(f"image: expected 1 or 3 channels, got shape {shape}")
-    run = numpy_runner(lambda: _blocks(image, tile))
-    return measure_blocks(
-        run,
-        shape[0] * shape[1],
-        np.asarray(image[:1, :1]).dtype,
-        weights=weights,
-        delta=delta,
-        bins=bins,
-    )
+    if len(shape) != 3 or shape[-1] != 3:
+        raise ValueError(f"image: expected (H, W, 3) RGB, got shape {shape}")
+    return _merged(image, tile, op.weights_, settings)[0]
 
 
 def resolve_halo(step: AbstractStep, shape, halo) -> tuple[int, int]:
@@ -109,8 +146,9 @@ def resolve_halo(step: AbstractStep, shape, halo) -> tuple[int, int]:
 
 
 def bind(step: AbstractStep, image, shape, stats, tile) -> AbstractStep:
-    if stats is None and step.needs_stats:
-        stats = statistics(image, tile=tile)
+    request = step.statistics_settings()
+    if stats is None and request is not None:
+        stats = _merged(image, tile, *request)[0]
     return step.bind(shape, stats)
 
 
@@ -130,7 +168,7 @@ def apply(
     *,
     tile: int | Sequence[int] = DEFAULT_TILE,
     halo: int | Sequence[int] | None = None,
-    stats: LuminanceStats | None = None,
+    stats: Statistics | None = None,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Run a neighbourhood ``step`` on an image tile by tile, with halos.
@@ -151,8 +189,10 @@ def apply(
         tile: output tile size (rows, columns) or one integer; must be at least the halo
             unless it spans the image.
         halo: pixels read beyond each tile; default (and minimum) the step's own.
-        stats: whole-image statistics for steps with global parameters (Reinhard's key);
-            ``None`` computes them with :func:`statistics` first.
+        stats: whole-image statistics for steps with global parameters (Reinhard's key):
+            for :class:`Tonemap`, the :class:`~hdrjax._stats.Statistics` its operator binds
+            (:func:`operator_statistics`, ``op.statistics(image)``, or those of parts
+            merged); ``None`` computes them from the tiles first (a first pass).
         out: preallocated result (e.g. ``np.memmap``), the image's shape; a new float32
             (float64 for float64 input under x64) array by default. May be ``image``
             itself for a pointwise step (halo 0).
@@ -193,4 +233,4 @@ def _store(out, result, r: Span, c: Span) -> None:
     out[r.out, c.out] = np.asarray(result)[r.crop, c.crop]
 
 
-__all__ = ["DEFAULT_TILE", "apply", "statistics", "tile_grid"]
+__all__ = ["DEFAULT_TILE", "apply", "operator_statistics", "statistics", "tile_grid"]

@@ -12,9 +12,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats
+from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
+from ..operators._base import AbstractOperator, StatisticsSettings
 from ._apply import check_glare, check_image, check_step, resolve_halo
-from ._stats import call_host, measure_blocks, stats_dtype
+from ._stats import call_host, merge_blocks, stats_dtype, summary
 from ._steps import AbstractStep
 
 
@@ -56,10 +57,34 @@ def dask_statistics(
     bins: int = DEFAULT_BINS,
 ) -> LuminanceStats:
     """:func:`hdrjax.tile.statistics` over a dask array's chunks (one compute)."""
+    if isinstance(bins, bool) or int(bins) != bins or bins < 2:
+        raise ValueError(f"bins: expected an integer >= 2, got {bins!r}")
     darr, shape = _check_darr(darr)
-    return measure_blocks(
-        _run_blocks(darr), shape[0] * shape[1], darr.dtype, weights=weights, delta=delta, bins=bins
+    settings = StatisticsSettings("histogram", int(bins), float(delta))
+    return summary(_merged(darr, shape, weights, settings))
+
+
+def _merged(darr, shape, weights, settings) -> tuple[Statistics, float]:
+    """The chunks' :class:`~hdrjax._stats.Statistics` (one compute), merged on the host."""
+    if len(shape) == 3 and shape[-1] not in (1, 3):
+        raise ValueError(f"darr: expected 1 or 3 channels, got shape {shape}")
+    return merge_blocks(
+        _run_blocks(darr), shape[0] * shape[1], darr.dtype, weights=weights, settings=settings
     )
+
+
+def dask_operator_statistics(op: AbstractOperator, darr) -> Statistics | None:
+    """:func:`hdrjax.tile.operator_statistics` over a dask array's chunks (one compute):
+    ``op.statistics`` of each chunk, merged; ``None`` when the operator needs none."""
+    if not isinstance(op, AbstractOperator):
+        raise ValueError(f"op: expected an hdrjax operator, got {type(op).__name__}")
+    settings = op.statistics_settings()
+    if settings is None:
+        return None
+    darr, shape = _check_darr(darr)
+    if len(shape) != 3 or shape[-1] != 3:
+        raise ValueError(f"darr: expected (H, W, 3) RGB, got shape {shape}")
+    return _merged(darr, shape, op.weights_, settings)[0]
 
 
 class _Window:
@@ -79,7 +104,7 @@ def to_dask(
     darr,
     *,
     halo: int | Sequence[int] | None = None,
-    stats: LuminanceStats | None = None,
+    stats: Statistics | None = None,
 ):
     """A lazy ``dask.array`` of ``step`` applied to ``darr`` via ``map_overlap``.
 
@@ -88,8 +113,9 @@ def to_dask(
         darr: ``(H, W)`` or ``(H, W, C)`` float dask array; every chunk at least the halo
             (the channel axis is put in one chunk).
         halo: overlap depth; default (and minimum) the step's own.
-        stats: whole-image statistics for steps with global parameters; ``None`` computes
-            them now with :func:`dask_statistics` (one compute over the chunks).
+        stats: whole-image statistics for steps with global parameters (for
+            :class:`~hdrjax.tile.Tonemap`, the :class:`~hdrjax._stats.Statistics` its
+            operator binds); ``None`` computes them now from the chunks (one compute).
 
     Returns:
         A dask array of the result (float32, or float64 for float64 input under x64), same
@@ -110,8 +136,9 @@ def to_dask(
                 f"darr: chunks of {small} {name} are smaller than the step's halo of {hh} {name};"
                 " rechunk to larger chunks"
             )
-    if stats is None and step.needs_stats:
-        stats = dask_statistics(darr)
+    request = step.statistics_settings()
+    if stats is None and request is not None:
+        stats = _merged(darr, shape, *request)[0]
     bound = step.bind(shape, stats)
     dtype = stats_dtype(darr.dtype)
     depth = {0: hy, 1: hx} if len(shape) == 2 else {0: hy, 1: hx, 2: 0}
@@ -125,4 +152,4 @@ def to_dask(
     )
 
 
-__all__ = ["dask_statistics", "to_dask"]
+__all__ = ["dask_operator_statistics", "dask_statistics", "to_dask"]

@@ -9,6 +9,7 @@ step handles them with the whole-image function's own edge rule (see :mod:`._lay
 
 import abc
 import functools
+import math
 from collections.abc import Callable, Sequence
 from typing import Literal
 
@@ -19,12 +20,10 @@ import numpy as np
 from jax import Array
 
 from .. import _check
-from .._stats import LuminanceStats
+from .._stats import Statistics
 from ..filters import mean_filter, median_filter
 from ..filters._api import check_passes, check_size
-from ..operators._base import AbstractLuminanceCurve, AbstractOperator
-from ..operators._reinhard2002 import Reinhard2002, jgt_key, jgt_white
-from ..operators._reinhard2002_local import Reinhard2002Local
+from ..operators._base import AbstractOperator, StatisticsSettings
 from ..vision._fft import fft_size, kernel_spectrum
 from ..vision._spencer1995 import Variant, apply_glare, glare_kernel, kernel_radius
 from ..vision._view import ResolvedView, View, resolve_view
@@ -36,16 +35,23 @@ TILE_MODES = ("nearest", "reflect", "mirror")
 class AbstractStep(eqx.Module):
     """A neighbourhood operation with a known halo (see the module docstring)."""
 
+    def statistics_settings(
+        self,
+    ) -> tuple[tuple[float, float, float], StatisticsSettings] | None:
+        """``(weights, settings)`` of the whole-image statistics :meth:`bind` reads (a first
+        pass over the tiles, :func:`hdrjax.tile.apply`), ``None`` when it reads none."""
+        return None
+
     @property
     def needs_stats(self) -> bool:
         """Whether :meth:`bind` needs whole-image statistics (a first pass)."""
-        return False
+        return self.statistics_settings() is not None
 
     @abc.abstractmethod
     def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
         """Pixels (rows, columns) beyond a tile that its result depends on."""
 
-    def bind(self, shape: tuple[int, ...], stats: LuminanceStats | None) -> "AbstractStep":
+    def bind(self, shape: tuple[int, ...], stats: Statistics | None) -> "AbstractStep":
         """The step for an image of ``shape`` with global ``stats`` (first pass) filled in."""
         del shape, stats
         return self
@@ -148,42 +154,31 @@ class Mean(_AbstractFilterStep):
         )
 
 
-def _bind_reinhard(op: AbstractOperator, stats: LuminanceStats | None) -> AbstractOperator:
-    """Fill a Reinhard operator's unset key/white/log-average from whole-image statistics,
-    with the formulas its own ``_measure`` uses."""
-    if not op.unset():
-        return op
-    if stats is None:
-        raise ValueError(f"{op.name}: unset parameters {op.unset()} need whole-image stats")
-    lbar = stats.log_average if op.log_average is None else op.log_average  # type: ignore[attr-defined]
-    key = jgt_key(stats) if op.key is None else op.key  # type: ignore[attr-defined]
-    if isinstance(op, Reinhard2002):
-        white = jgt_white(stats, key / lbar) if op.L_white is None else op.L_white
-        return eqx.tree_at(
-            lambda o: (o.key, o.L_white, o.log_average),
-            op,
-            (key, white, lbar),
-            is_leaf=lambda x: x is None,
-        )
-    return eqx.tree_at(
-        lambda o: (o.key, o.log_average), op, (key, lbar), is_leaf=lambda x: x is None
-    )
+@eqx.filter_jit
+def _bind(op: AbstractOperator, stats: Statistics | None) -> AbstractOperator:
+    """``op.bind(stats)`` as one compiled program (eagerly, each operation compiles apart)."""
+    return op.bind(stats)
 
 
 class Tonemap(AbstractStep):
     """A tone-mapping operator on tiles, its global parameters from the first pass.
 
-    Supported: :class:`~hdrjax.operators.Reinhard2002` (pointwise, halo 0) and
-    :class:`~hdrjax.operators.Reinhard2002Local` (halo = radius of its largest Gaussian,
-    ``ceil(4 s_max / (2√2))``: 38 pixels for the default scales), whose unset key, white and
-    log-average come from :func:`hdrjax.tile.statistics` exactly as the operator would
-    measure them; and any pointwise luminance-curve operator whose parameters are all set.
-    The local operator's normalised convolution zero-pads at the true image edges in the
-    window as in the whole image; its FFTs differ in size, so the Gaussian responses agree
-    to float rounding (about 1e-6 relative in float32), not bit for bit. Its per-pixel
-    scale choice (first scale with activity ``|V_i| > ε``) is discontinuous: where an
-    activity lies within that rounding of ``ε`` a tile may pick the neighbouring scale
-    (4 of 262 144 pixels of data/cornell_box.exr, output differing by up to 0.03).
+    Any operator whose :meth:`~hdrjax.operators.AbstractOperator.halo` is finite: the
+    pointwise ones (halo 0; they may run in place) and the neighbourhood ones that declare
+    their reach (:class:`~hdrjax.operators.Reinhard2002Local`: the radius of its largest
+    Gaussian, ``ceil(4 s_max / (2√2))``, 39 pixels for the default scales). Unset
+    parameters come from the operator's own :meth:`~hdrjax.operators.AbstractOperator.bind`
+    of the whole image's statistics, merged from the tiles' (:func:`hdrjax.tile.apply`'s
+    first pass): the result is the whole-image operator bound to
+    ``op.statistics(image)``, to float rounding (log sums added per tile; for Tumblin et
+    al. 1999 the trimmed adaptation luminance is then the histogram estimate, as for any
+    merged statistics). The local operator's normalised convolution zero-pads at the true
+    image edges in the window as in the whole image; its FFTs differ in size, so the
+    Gaussian responses agree to float rounding (about 1e-6 relative in float32), not bit
+    for bit. Its per-pixel scale choice (first scale with activity ``|V_i| > ε``) is
+    discontinuous: where an activity lies within that rounding of ``ε`` a tile may pick the
+    neighbouring scale (4 of 262 144 pixels of data/cornell_box.exr, output differing by up
+    to 0.03).
     """
 
     operator: AbstractOperator
@@ -192,24 +187,32 @@ class Tonemap(AbstractStep):
         op = self.operator
         if not isinstance(op, AbstractOperator):
             raise ValueError(f"operator: expected an hdrjax operator, got {type(op).__name__}")
-        known = isinstance(op, Reinhard2002 | Reinhard2002Local)
-        if not known and not (isinstance(op, AbstractLuminanceCurve) and not op.unset()):
-            raise ValueError(
-                f"operator: {op.name} cannot run on tiles; supported: reinhard2002,"
-                " reinhard2002_local, or a pointwise curve operator with every parameter set"
-            )
 
-    @property
-    def needs_stats(self) -> bool:
-        return bool(self.operator.unset())
+    def statistics_settings(self):
+        settings = self.operator.statistics_settings()
+        if settings is None:
+            return None
+        return self.operator.weights_, settings
 
     def halo(self, shape):
         _check.shape(jax.ShapeDtypeStruct(tuple(shape), jnp.float32), "image", ndim=3)
-        return self.operator.halo(tuple(shape))
+        h = tuple(self.operator.halo(tuple(shape)))
+        if len(h) != 2 or not all(math.isfinite(v) and v >= 0 for v in h):
+            raise ValueError(
+                f"operator: {self.operator.name} reads the whole image (halo {h}), so it cannot"
+                " run on tiles; run the whole image instead"
+            )
+        return int(math.ceil(h[0])), int(math.ceil(h[1]))
 
     def bind(self, shape, stats):
         del shape
-        return Tonemap(_bind_reinhard(self.operator, stats))
+        if stats is not None and not isinstance(stats, Statistics):
+            raise ValueError(
+                f"stats: expected the merged Statistics {self.operator.name} binds"
+                " (hdrjax.tile.operator_statistics(op, image) or op.statistics(image)), got"
+                f" {type(stats).__name__}"
+            )
+        return Tonemap(_bind(self.operator, stats))
 
     def __call__(self, window):
         return self.operator(jnp.asarray(window))

@@ -19,10 +19,7 @@ ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 # Private statistics internals still imported across modules: issue 17 point 1 replaces them
 # with the one mergeable statistics implementation. An entry that no longer occurs fails
 # (remove it).
-KNOWN_PRIVATE = {
-    ("hdrjax.tile._stats", "hdrjax._stats._from_counts"),
-    ("hdrjax.tile._stats", "hdrjax._stats._histogram"),
-}
+KNOWN_PRIVATE: set[tuple[str, str]] = set()
 
 
 def _modules(root: Path | None = None) -> dict[str, tuple[Path, bool]]:

@@ -67,7 +67,8 @@ def test_statistics_and_reinhard_threaded_scheduler(image):
     x, d = image
     with dask.config.set(scheduler="threads"):
         st = T.dask_statistics(d)
-        got = np.asarray(T.to_dask(T.Tonemap(Reinhard2002()), d, stats=st).compute())
+        op_st = T.dask_operator_statistics(Reinhard2002(), d)  # the chunks' Statistics, merged
+        got = np.asarray(T.to_dask(T.Tonemap(Reinhard2002()), d, stats=op_st).compute())
     ref = T.statistics(x, tile=(128, 96))
     for name, v in vars(ref).items():
         assert np.asarray(getattr(st, name)) == np.asarray(v), name

@@ -39,7 +39,7 @@ def _close(got, ref, **tol):
 def test_reinhard_global_key_from_first_pass():
     x = crop(120, 100)
     ref = Reinhard2002()(x)
-    stats = T.statistics(x, tile=(37, 50))
+    stats = T.operator_statistics(Reinhard2002(), x, tile=(37, 50))
     got = T.apply(T.Tonemap(Reinhard2002()), x, tile=(37, 50), stats=stats)
     _close(got, ref, rtol=RTOL32, atol=1e-7)
     # pointwise: may run in place; the image's own values are replaced by the result
