@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .. import luminance
-    from .._stats import measure, percentile
+    from .._stats import percentile, summarise
     from ..operators import get_operator, operator_names, parameter_info
 
     img, rgb = load_rgb(args.input, args.scale)
@@ -52,9 +52,18 @@ def run(args: argparse.Namespace) -> int:
     print("luminance weights: (" + ", ".join(f"{v:.5f}" for v in wts) + ")")
     L = luminance(jnp.asarray(rgb), wts)
     method = "exact" if args.exact else "histogram"
-    st = jax.jit(lambda x: measure(x, method=method))(jnp.where(jnp.isfinite(L), L, jnp.nan))
     qs = jnp.array([1.0, 5.0, 50.0, 95.0, 99.0])
-    ps, err = jax.jit(lambda x: percentile(x, qs, method=method))(L)
+
+    @jax.jit
+    def statistics(L):
+        # one pass: the histogram's percentiles come from the same statistics
+        finite_only = jnp.where(jnp.isfinite(L), L, jnp.nan)
+        stats = summarise(finite_only, method=method, keep_source=False)[1]
+        if method == "exact":
+            return stats.luminance_stats(), percentile(L, qs, method="exact")
+        return stats.luminance_stats(), stats.quantile(jnp.asarray(qs, L.dtype) / 100.0)
+
+    st, (ps, err) = statistics(L)
     n_bad = int(st.n_nonfinite)
     print("luminance (finite pixels):")
     print(
