@@ -118,25 +118,6 @@ def test_hard_families(name, dtype):
         pytest.xfail(f"{len(known)} known-open families (KNOWN_OPEN): " + "; ".join(known))
 
 
-@pytest.mark.parametrize("name", NAMES)
-def test_degenerate_shapes(name):
-    """(1, 1, 3), (1, W, 3), (H, 1, 3) natural images: finite outputs ((H, W, 3) is every
-    family of test_hard_families)."""
-    case = CASES[name]
-    fn = jax.jit(case.fn) if case.jit else case.fn
-    for shape in [(1, 1), (1, 9), (7, 1)]:
-        img = natural(shape)
-        try:
-            out = fn(img)
-        except ValueError as e:  # a documented minimum size, named with the expected form
-            msg = str(e)
-            assert "\n" not in msg, f"{name}: {shape}: {msg}"
-            assert ("expected" in msg or "need" in msg) and ":" in msg, msg
-            continue
-        for leaf in float_leaves(out):
-            assert np.all(np.isfinite(leaf)), f"{name}: non-finite output for {shape}"
-
-
 @pytest.mark.parametrize("name", BATCHED)
 def test_batches_equal_loops(name):
     """A function that accepts ``(..., H, W, 3)`` gives each frame its own result."""
@@ -148,21 +129,6 @@ def test_batches_equal_loops(name):
     ref = [np.stack(v) for v in zip(*(float_leaves(fn(f)) for f in frames), strict=True)]
     for g, r in zip(got, ref, strict=True):
         np.testing.assert_allclose(g, r, rtol=RTOL32, atol=1e-6, err_msg=name)
-
-
-@pytest.mark.parametrize("name", TRACED)
-def test_jit_equals_eager_and_vmap_equals_loop(name):
-    case = CASES[name]
-    frames = np.stack([natural((8, 8), seed=s) for s in range(3)])
-    eager = float_leaves(case.fn(frames[0]))  # op by op: slow, one frame
-    f = jax.jit(case.fn)
-    loop = [float_leaves(f(x)) for x in frames]
-    vmapped = float_leaves(jax.jit(jax.vmap(case.fn))(frames))
-    for a, b in zip(loop[0], eager, strict=True):
-        np.testing.assert_allclose(a, b, rtol=RTOL32, atol=1e-6, err_msg=f"{name}: jit")
-    for k, v in enumerate(vmapped):
-        ref = np.stack([e[k] for e in loop])
-        np.testing.assert_allclose(v, ref, rtol=RTOL32, atol=1e-6, err_msg=f"{name}: vmap")
 
 
 def _loss(case):

@@ -1,0 +1,67 @@
+"""Every registered operator: degenerate shapes, float16 and float64 inputs, and jit and
+vmap equal to eager calls.
+
+Split from ``test_conformance.py`` (same registry, same cases) so that the test workers,
+which take whole files, share the conformance suite's time."""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import hdrjax
+
+from ..conftest import RTOL32, enable_x64
+from .cases import make, natural
+from .test_conformance import NAMES
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_degenerate_shapes(name):
+    """One pixel, one row, one column: finite, same shape (issue 10's shape list)."""
+    op = make(name)
+    for shape in [(1, 1), (1, 9), (7, 1)]:
+        img = natural(shape)
+        out = np.asarray(op(img))
+        assert out.shape == img.shape and np.all(np.isfinite(out)), f"{name}: {shape}"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_float16_input(name):
+    img = natural().astype(np.float16)
+    out = hdrjax.tonemap(
+        img,
+        name,
+        **({} if name != "tabulated" else dict(luminance=[0.01, 1, 100], display=[0.02, 0.5, 1])),
+    )
+    assert out.dtype == jnp.float32
+    ref = hdrjax.tonemap(
+        img.astype(np.float32),
+        name,
+        **({} if name != "tabulated" else dict(luminance=[0.01, 1, 100], display=[0.02, 0.5, 1])),
+    )
+    np.testing.assert_allclose(out, ref, rtol=RTOL32)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_jit_equals_eager_and_vmap_equals_loop(name):
+    op = make(name)
+    frames = np.stack([natural(seed=s) for s in range(3)])
+    eager = np.stack([np.asarray(op(f)) for f in frames])
+    jitted = np.asarray(eqx.filter_jit(lambda o, x: o(x))(op, frames))
+    np.testing.assert_allclose(jitted, eager, rtol=RTOL32, atol=1e-6)
+    # batch shape does not matter: (3, H, W, 3) vs (3, 1, H, W, 3)
+    nested = np.asarray(op(frames[:, None]))[:, 0]
+    np.testing.assert_allclose(nested, eager, rtol=RTOL32, atol=1e-6)
+    # and each frame's statistics are its own
+    assert not np.allclose(eager[0], np.asarray(op(frames[1])))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_float64_agrees_with_float32(name):
+    img = natural()
+    out32 = np.asarray(make(name)(img))
+    with enable_x64():
+        out64 = np.asarray(make(name)(img.astype(np.float64)))
+    assert out32.dtype == np.float32 and out64.dtype == np.float64
+    np.testing.assert_allclose(out32, out64, rtol=2e-3, atol=1e-5)
