@@ -1,11 +1,13 @@
 """Bad arguments raise ValueError with a message naming the argument and what was expected."""
 
+import math
+
 import dask.array as da
 import numpy as np
 import pytest
 
 import hdrjax.tile as T
-from hdrjax.operators import Reinhard2002, Reinhard2002Local
+from hdrjax.operators import Gamma, Reinhard2002, Reinhard2002Local
 from hdrjax.tile._layout import spans
 
 X = np.zeros((40, 30, 3), np.float32)
@@ -64,6 +66,20 @@ def test_out_and_image_checks():
         T.statistics(X, bins=1)
     with pytest.raises(ValueError, match="Reinhard2002|reinhard2002"):
         T.Tonemap(Reinhard2002()).bind(X.shape, None)
+
+
+def test_tonemap_refuses_what_it_cannot_bind_or_tile():
+    # the LuminanceStats summary cannot feed op.bind: the merged Statistics are needed
+    with pytest.raises(ValueError, match=r"^stats: expected the merged Statistics reinhard2002"):
+        T.Tonemap(Reinhard2002()).bind(X.shape, T.statistics(X, tile=40))
+    # an operator that reads the whole image (an unbounded halo) cannot run on tiles
+
+    class WholeImage(Gamma):
+        def halo(self, shape):
+            return math.inf, math.inf
+
+    with pytest.raises(ValueError, match=r"^operator: gamma reads the whole image"):
+        T.apply(T.Tonemap(WholeImage()), X, tile=16)
 
 
 def test_dask_chunks_smaller_than_halo():
