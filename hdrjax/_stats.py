@@ -994,6 +994,84 @@ def summarise_histogram(
     )
 
 
+def selection_range(q: ArrayLike) -> tuple[float | None, float | None] | None:
+    """``(max q < 50, min q ≥ 50)`` of concrete percentiles ``q``: the ``select`` hint of
+    :func:`percentile_by_selection`, fixed where ``q`` is known (``None`` when it is
+    traced)."""
+    try:
+        v = [float(x) for x in np.asarray(q).reshape(-1)]
+    except (TypeError, jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError):
+        return None
+    lo = [x for x in v if x < 50.0]
+    hi = [x for x in v if x >= 50.0]
+    return (max(lo) if lo else None, min(hi) if hi else None)
+
+
+def percentile_by_selection(
+    L: Float[ArrayLike, "..."],
+    q: Float[ArrayLike, " Q"],
+    *,
+    select: tuple[float | None, float | None] | None,
+    where: ArrayLike | None = None,
+) -> Float[Array, " Q"]:
+    """``percentile(L, q, method="exact", where=where)[0]`` (the same values, up to the
+    rounding of the final interpolation, and gradients) by partial selection where it is
+    cheaper than the sort: ``P_q`` with ``q ≥ 50`` lies among the ``⌊(N − 1)(1 − q/100)⌋
+    + 3`` largest of ``N`` values (one more per Mpixel, for rounding; ``jax.lax.top_k``,
+    ~15× faster than XLA:CPU's sort for ``P99`` of 2048 values), ``q < 50`` among the
+    smallest.
+
+    ``select`` (:func:`selection_range` of the ``q`` the selection sizes are made for,
+    static) fixes those sizes; a traced ``q`` outside them, ``select=None``, or a selection
+    larger than a quarter of the values sorts instead. NaN with no finite positive value.
+    """
+
+    def by_sort():
+        return percentile(L, q, method="exact", where=where)[0]
+
+    L = _float(L)
+    N = L.size
+    if select is None or N < 16:
+        return by_sort()
+    lo_q, hi_q = select
+    # the ranks needed for any count n ≤ N of valid pixels, with spare places for the
+    # rounding of q·(n − 1) in the image's dtype
+    spare = 3 + N // 1_000_000
+    k_lo = 0 if lo_q is None else min(N, int((N - 1) * max(lo_q, 0.0) / 100.0) + spare)
+    k_hi = 0 if hi_q is None else min(N, int((N - 1) * (1.0 - min(hi_q, 100.0) / 100.0)) + spare)
+    if max(k_lo, k_hi) > N // 4:
+        return by_sort()
+    x = L.reshape(-1)
+    valid = jnp.isfinite(x) & (x >= jnp.finfo(x.dtype).tiny)
+    if where is not None:
+        valid = valid & jnp.broadcast_to(jnp.asarray(where, bool), L.shape).reshape(-1)
+    n = jnp.sum(valid)
+    qs = jnp.asarray(q, x.dtype) / 100.0
+    pos = qs * (n - 1).astype(x.dtype)
+    j0 = jnp.floor(pos).astype(jnp.int32)
+    frac = pos - j0.astype(x.dtype)
+    j1 = jnp.minimum(j0 + 1, n - 1)
+    lower = qs < 0.5
+    v0 = v1 = jnp.zeros_like(qs)
+    # the selections cover q ≤ lo_q and q ≥ hi_q for every n; the test depends on q only,
+    # so under a vmap over frames (one shared target) the cond below stays a branch
+    q_pct = jnp.asarray(q)
+    ok = jnp.where(
+        lower, q_pct <= (-1.0 if lo_q is None else lo_q), q_pct >= (101.0 if hi_q is None else hi_q)
+    )
+    if k_lo:  # the k_lo smallest, ascending: rank j is at j
+        small = -jax.lax.top_k(jnp.where(valid, -x, -jnp.inf), k_lo)[0]
+        v0 = jnp.where(lower, jnp.take(small, jnp.clip(j0, 0, k_lo - 1)), v0)
+        v1 = jnp.where(lower, jnp.take(small, jnp.clip(j1, 0, k_lo - 1)), v1)
+    if k_hi:  # the k_hi largest, descending: rank j is at n − 1 − j
+        large = jax.lax.top_k(jnp.where(valid, x, -jnp.inf), k_hi)[0]
+        v0 = jnp.where(lower, v0, jnp.take(large, jnp.clip(n - 1 - j0, 0, k_hi - 1)))
+        v1 = jnp.where(lower, v1, jnp.take(large, jnp.clip(n - 1 - j1, 0, k_hi - 1)))
+    vals = jnp.where(n > 0, v0 + frac * (v1 - v0), jnp.nan)
+    # a q moved outside the selection after construction: sort (cond runs one branch)
+    return jax.lax.cond(jnp.all(ok), lambda: vals, by_sort)
+
+
 __all__ = [
     "DEFAULT_BINS",
     "DEFAULT_DELTA",
@@ -1001,6 +1079,8 @@ __all__ = [
     "Statistics",
     "measure",
     "percentile",
+    "percentile_by_selection",
+    "selection_range",
     "summarise",
     "summarise_histogram",
 ]

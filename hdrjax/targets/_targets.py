@@ -26,12 +26,11 @@ from collections.abc import Sequence
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance
-from .._stats import percentile
+from .._stats import percentile_by_selection, selection_range
 from ..display import srgb_encode
 
 
@@ -139,13 +138,11 @@ class Percentiles(AbstractStatisticTarget):
     """Display-luminance percentiles: ``s_i = P_{q_i}(L_d)`` (linear interpolation between
     order statistics, as ``numpy.percentile``; pixels with ``L_d ≤ 0`` are excluded).
 
-    Percentiles far from the median are found by partial selection instead of a full sort:
-    ``P_q`` with ``q ≥ 50`` lies among the ``⌊(N − 1)(1 − q/100)⌋ + 3`` largest of ``N``
-    pixels (one more per Mpixel, for rounding; ``jax.lax.top_k``, ~15× faster than XLA:CPU's
-    sort for ``P99`` of 2048 pixels), ``q < 50`` among the smallest. The selection size is
-    fixed when the target is built (from the concrete ``q``); a ``q`` changed later that
-    falls outside it, or a selection larger than a quarter of the image, sorts instead.
-    Both give the same values and gradients.
+    Percentiles far from the median are found by partial selection instead of a full sort
+    (:func:`hdrjax.stats.percentile_by_selection`: ``jax.lax.top_k`` over the few pixels
+    that can hold them). The selection size is fixed when the target is built (from the
+    concrete ``q``); a ``q`` changed later that falls outside it, or a selection larger than
+    a quarter of the image, sorts instead. Both give the same values and gradients.
 
     Attributes:
         q: percentiles in [0, 100], e.g. ``(1, 99)``.
@@ -175,7 +172,7 @@ class Percentiles(AbstractStatisticTarget):
         self.value = _vec(value)
         self.weight = _arr(weight)
         self.weights = _weights(weights)
-        self.select = _selection_range(self.q)
+        self.select = selection_range(self.q)
 
     def __check_init__(self):
         _check.in_range(self.q, "q", 0.0, 100.0)
@@ -187,67 +184,7 @@ class Percentiles(AbstractStatisticTarget):
 
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " n"]:
         L, finite = _display_luminance(display, self.weights)
-        return _percentiles(L, finite, self.q, self.select)
-
-
-def _selection_range(q: Array) -> tuple[float | None, float | None] | None:
-    """``(max q < 50, min q ≥ 50)`` of a concrete ``q`` (``None`` when ``q`` is traced)."""
-    try:
-        v = [float(x) for x in np.asarray(q).reshape(-1)]
-    except (TypeError, jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError):
-        return None
-    lo = [x for x in v if x < 50.0]
-    hi = [x for x in v if x >= 50.0]
-    return (max(lo) if lo else None, min(hi) if hi else None)
-
-
-def _percentiles(
-    L: Array, where: Array, q: Array, select: tuple[float | None, float | None] | None
-) -> Array:
-    """``numpy.percentile`` (linear) of the positive finite ``L[where]``, by partial selection
-    (``jax.lax.top_k``) where ``select`` allows it, else by a sort; NaN with no such pixel."""
-
-    def by_sort():
-        return percentile(L, q, method="exact", where=where)[0]
-
-    N = L.size
-    if select is None or N < 16:
-        return by_sort()
-    lo_q, hi_q = select
-    # the ranks needed for any count n ≤ N of valid pixels, with spare places for the
-    # rounding of q·(n − 1) in the image's dtype
-    spare = 3 + N // 1_000_000
-    k_lo = 0 if lo_q is None else min(N, int((N - 1) * max(lo_q, 0.0) / 100.0) + spare)
-    k_hi = 0 if hi_q is None else min(N, int((N - 1) * (1.0 - min(hi_q, 100.0) / 100.0)) + spare)
-    if max(k_lo, k_hi) > N // 4:
-        return by_sort()
-    x = L.reshape(-1)
-    valid = (jnp.isfinite(x) & (x >= jnp.finfo(x.dtype).tiny)) & where.reshape(-1)
-    n = jnp.sum(valid)
-    qs = jnp.asarray(q, x.dtype) / 100.0
-    pos = qs * (n - 1).astype(x.dtype)
-    j0 = jnp.floor(pos).astype(jnp.int32)
-    frac = pos - j0.astype(x.dtype)
-    j1 = jnp.minimum(j0 + 1, n - 1)
-    lower = qs < 0.5
-    v0 = v1 = jnp.zeros_like(qs)
-    # the selections cover q ≤ lo_q and q ≥ hi_q for every n; the test depends on q only,
-    # so under a vmap over frames (one shared target) the cond below stays a branch
-    q_pct = jnp.asarray(q)
-    ok = jnp.where(
-        lower, q_pct <= (-1.0 if lo_q is None else lo_q), q_pct >= (101.0 if hi_q is None else hi_q)
-    )
-    if k_lo:  # the k_lo smallest, ascending: rank j is at j
-        small = -jax.lax.top_k(jnp.where(valid, -x, -jnp.inf), k_lo)[0]
-        v0 = jnp.where(lower, jnp.take(small, jnp.clip(j0, 0, k_lo - 1)), v0)
-        v1 = jnp.where(lower, jnp.take(small, jnp.clip(j1, 0, k_lo - 1)), v1)
-    if k_hi:  # the k_hi largest, descending: rank j is at n − 1 − j
-        large = jax.lax.top_k(jnp.where(valid, x, -jnp.inf), k_hi)[0]
-        v0 = jnp.where(lower, v0, jnp.take(large, jnp.clip(n - 1 - j0, 0, k_hi - 1)))
-        v1 = jnp.where(lower, v1, jnp.take(large, jnp.clip(n - 1 - j1, 0, k_hi - 1)))
-    vals = jnp.where(n > 0, v0 + frac * (v1 - v0), jnp.nan)
-    # a q moved outside the selection after construction: sort (cond runs one branch)
-    return jax.lax.cond(jnp.all(ok), lambda: vals, by_sort)
+        return percentile_by_selection(L, self.q, select=self.select, where=finite)
 
 
 class ClippedFraction(AbstractStatisticTarget):

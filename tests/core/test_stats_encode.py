@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 import hdrjax
-from hdrjax._stats import measure, percentile, summarise, summarise_histogram
+from hdrjax._stats import (
+    measure,
+    percentile,
+    percentile_by_selection,
+    selection_range,
+    summarise,
+    summarise_histogram,
+)
 from hdrjax.display import encode, gamma_encode, quantize, srgb_decode, srgb_encode
 
 from ..tile.test_stats import trimmed_log_bound
@@ -101,6 +108,30 @@ def test_quantiles_of_merged_statistics_and_the_single_pass():
         jax.eval_shape(lambda L: summarise(L, method="exact")[1].quantile(q), L)
     with pytest.raises(ValueError, match="^q: expected numbers in"):
         jax.eval_shape(lambda L: summarise(L)[1].quantile(50.0), L)
+
+
+def test_percentile_by_selection_is_the_exact_percentile():
+    """Partial selection (the fit's percentile targets): the exact method's values, with and
+    without a mask, and the sort for a q outside the selection it was sized for."""
+    L = np.random.default_rng(7).lognormal(0, 2, (8, 8)).astype(np.float32)
+    L[0, :2] = [0.0, np.nan]
+    mask = np.ones((8, 8), bool)
+    mask[1] = False
+    q = np.array([2.0, 95.0], np.float32)
+    select = selection_range(q)
+    assert select == (2.0, 95.0) and selection_range([50.0]) == (None, 50.0)
+
+    @jax.jit
+    def both(L, q, where):
+        got = (percentile_by_selection(L, q, select=select, where=w) for w in (None, where))
+        want = (percentile(L, q, method="exact", where=w)[0] for w in (None, where))
+        return tuple(got), tuple(want)
+
+    for qq in (q, np.array([2.0, 60.0], np.float32)):  # 60 lies outside the selection: sorted
+        got, want = both(L, qq, mask)
+        np.testing.assert_allclose(got, want, rtol=1e-6)  # the final interpolation's rounding
+    ref = np.percentile(L[np.isfinite(L) & (L > 0)], q)
+    np.testing.assert_allclose(both(L, q, mask)[0][0], ref, rtol=1e-6)
 
 
 def test_measure_against_numpy(x64):
