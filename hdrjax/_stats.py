@@ -443,13 +443,27 @@ def _extrema_and_sums(L: Array, assume_finite: bool, delta: float):
             lmin,
             lmax,
             jnp.min(jnp.where(pos, Lz, big), initial=big),
-            jnp.sum(terms),
+            _row_sum(terms),
         )
 
     _, (n_fin, n_pos, lmin, lmax, minpos, s) = _blockwise(block, None, L)
     i32 = jnp.int32
     n_fin, n_pos = jnp.sum(n_fin, dtype=i32), jnp.sum(n_pos, dtype=i32)
     return n_fin, n_pos, jnp.min(lmin), jnp.max(lmax), jnp.min(minpos), jnp.sum(s)
+
+
+def _row_sum(v: Array, row: int = 8) -> Array:
+    """Sum of a vector as a tree of sums of ``row`` terms (zero-padded): XLA:CPU's plain
+    1-D float32 sum of a few hundred terms runs in sequence and can end several ulp per
+    term off (the log sums of small images and tiles); the tree is within about one."""
+    v = v.reshape(-1)
+    while v.shape[0] > row:
+        pad = (-v.shape[0]) % row
+        if pad:
+            v = jnp.concatenate([v, jnp.zeros(pad, v.dtype)])
+        # (the barrier keeps XLA from merging the nested sums back into one 1-D sum)
+        v = jax.lax.optimization_barrier(jnp.sum(v.reshape(-1, row), axis=1))
+    return jnp.sum(v)
 
 
 LANES = 1 << 14
@@ -478,7 +492,7 @@ def _one_pass(L: Array, m: int | None, delta: float | None):
 
     def reduce_lanes(cnt, mn, mx, mp, s, f):
         mn, mx, mp = jnp.min(mn, initial=big), jnp.max(mx, initial=-big), jnp.min(mp, initial=big)
-        return cnt, mn, mx, mp, jnp.sum(s), jnp.sum(f)
+        return cnt, mn, mx, mp, _row_sum(s), jnp.sum(f)
 
     def part(c, Lb, lanes: bool, log: bool = True):
         """Fold block ``Lb`` into ``c``: lane by lane, or (``lanes=False``) reduced;

@@ -42,6 +42,11 @@ EXEMPT = {
     # mergeable statistics: merge and bind over the registry (tests/operators/test_statistics.py)
     "hdrjax.stats.Statistics": "statistics record (tests/operators/test_statistics.py)",
     "hdrjax.stats.summarise": "luminance statistics (tests/operators/test_statistics.py)",
+    "hdrjax.stats.summarise_histogram": "summarise's single pass (tests/core/test_stats_encode.py)",
+    "hdrjax.stats.percentile_by_selection": "exact percentiles (tests/core/test_stats_encode.py)",
+    "hdrjax.stats.selection_range": "percentile_by_selection's range (test_stats_encode.py)",
+    "hdrjax.tile.operator_statistics": "merged tile statistics (tests/tile/test_registry.py)",
+    "hdrjax.tile.dask_operator_statistics": "merged dask statistics (tests/tile/test_dask.py)",
     "hdrjax.operators.AbstractLuminanceCurve": "abstract base: its subclasses are the registry",
     # the plug-in author's helpers: every registered operator's bind uses them; the docs'
     # plug-in example runs through tests/operators/test_plugins.py
