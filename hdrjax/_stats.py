@@ -452,18 +452,18 @@ def _extrema_and_sums(L: Array, assume_finite: bool, delta: float):
     return n_fin, n_pos, jnp.min(lmin), jnp.max(lmax), jnp.min(minpos), jnp.sum(s)
 
 
-def _row_sum(v: Array, row: int = 8) -> Array:
-    """Sum of a vector as a tree of sums of ``row`` terms (zero-padded): XLA:CPU's plain
-    1-D float32 sum of a few hundred terms runs in sequence and can end several ulp per
-    term off (the log sums of small images and tiles); the tree is within about one."""
+def _row_sum(v: Array) -> Array:
+    """Sum of a vector as a tree of pairwise sums (halves added element-wise, zero-padded):
+    XLA:CPU's plain 1-D float32 sum of a few hundred terms runs in sequence and can end
+    several ulp per term off (the log sums of small images and tiles); the tree is within
+    about one. Element-wise adds, not nested reductions, which XLA would merge back."""
     v = v.reshape(-1)
-    while v.shape[0] > row:
-        pad = (-v.shape[0]) % row
-        if pad:
-            v = jnp.concatenate([v, jnp.zeros(pad, v.dtype)])
-        # (the barrier keeps XLA from merging the nested sums back into one 1-D sum)
-        v = jax.lax.optimization_barrier(jnp.sum(v.reshape(-1, row), axis=1))
-    return jnp.sum(v)
+    while v.shape[0] > 1:
+        if v.shape[0] % 2:
+            v = jnp.concatenate([v, jnp.zeros(1, v.dtype)])
+        half = v.shape[0] // 2
+        v = v[:half] + v[half:]
+    return v.reshape(()) if v.shape[0] == 1 else jnp.sum(v)
 
 
 LANES = 1 << 14
