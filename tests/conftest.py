@@ -51,3 +51,12 @@ def x64():
 
 
 os.environ.setdefault("HDRJAX_CACHE", "0")
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_compiled_programs():
+    """Drop the compiled programs after each test file: a test worker runs whole files in
+    sequence, and one that kept every executable of hundreds of files (several GB, each
+    with its own code mappings) crashed inside an XLA:CPU compile late in two full runs."""
+    yield
+    jax.clear_caches()
