@@ -400,7 +400,7 @@ def run(quick: bool = False) -> list[dict]:
         out += [
             H.record(BENCH, case, "hdrjax", timing=t_ours, compiled=True, **_flat(qo)),
             H.record(BENCH, case, "hdrjax (NumPy input)", timing=t_np),
-            H.record(BENCH, case, "seed 001 listing", timing=t_peer, **_flat(qp)),
+            H.record(BENCH, case, "Loghin 2019 listing", timing=t_peer, **_flat(qp)),
         ]
 
     # ---- 2. batch: one vmapped call over the same-size maps
