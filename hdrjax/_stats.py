@@ -138,20 +138,6 @@ class LuminanceStats(eqx.Module):
         return jnp.where(self.n_positive > 0, jnp.log2(mx) - jnp.log2(self.min_positive), 0.0)
 
 
-def _hist_quantiles(counts: Array, lo: Array, width: Array, qs: Array) -> Array:
-    """Linear-interpolation quantiles (``numpy.percentile``'s default rank ``q (n-1)``)."""
-    n = jnp.sum(counts)
-    cum = jnp.cumsum(counts)
-    rank = qs * jnp.maximum(n - 1, 0).astype(lo.dtype)
-    # bin holding element number floor(rank): first bin whose cumulative count exceeds it
-    b = jnp.searchsorted(cum, jnp.floor(rank).astype(cum.dtype), side="right")
-    b = jnp.clip(b, 0, counts.shape[0] - 1)
-    before = jnp.where(b > 0, cum[jnp.maximum(b - 1, 0)], 0).astype(lo.dtype)
-    inside = jnp.maximum(counts[b], 1).astype(lo.dtype)
-    frac = jnp.clip((rank - before + 0.5) / inside, 0.0, 1.0)
-    return jnp.exp(lo + (b.astype(lo.dtype) + frac) * width)
-
-
 BLOCK = 1 << 18
 """Elements per block of the blocked passes (1 MiB of float32)."""
 

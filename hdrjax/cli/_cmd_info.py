@@ -84,17 +84,17 @@ def run(args: argparse.Namespace) -> int:
         f" NaN/Inf pixels {n_bad}"
     )
     print("estimated parameters:")
-    # every operator that declares an estimated parameter, measured in one compiled call
+    # every operator that declares an estimated parameter, bound in one compiled call to
+    # statistics measured once per statistics setting (most operators share one)
     classes = [get_operator(name) for name in operator_names()]
     ops = [with_weights(c(), wts) for c in classes if any(i.estimated for i in parameter_info(c))]
-    all_measured = eqx.filter_jit(lambda os, x: [o.measure(x) for o in os])(ops, jnp.asarray(rgb))
+    all_measured = eqx.filter_jit(_measure_all)(ops, jnp.asarray(rgb))
     for op, measured in zip(ops, all_measured, strict=True):
         text = describe(measured).splitlines()
         keep = [ln for ln in text[1:] if ln.split(":")[0].strip() in op.unset()]
         if keep:  # reinhard2002_auto measures in its branches: its choice is printed below
             print(f"  {op.name}: " + ", ".join(s.strip() for s in keep))
-    auto = get_operator("reinhard2002_auto")(weights=wts)
-    use_local = bool(auto.measure(jnp.asarray(rgb)).local)
+    use_local = bool(next(m for m in all_measured if m.name == "reinhard2002_auto").local)
     print(
         f"  reinhard2002_auto: {'local' if use_local else 'global'} operator"
         f" ({float(st.dynamic_range_stops):.1f} zones {'>' if use_local else '<='} 11)"
@@ -106,20 +106,48 @@ def run(args: argparse.Namespace) -> int:
 
 def print_estimates(rgb, weights, method: str) -> None:
     """Each :mod:`hdrjax.estimate` value and the statistics it was computed from."""
+    import jax
+
     from .. import estimate as E
 
     print("automatic estimates (value; the statistics it used):")
-    rows = (
-        (E.jgt_key(rgb, percentile_method=method, weights=weights), ""),
-        (E.jgt_white(rgb, percentile_method=method, weights=weights), " (scaled units)"),
-        (E.log_average(rgb, weights=weights), ""),
-        (E.adaptation_luminance(rgb, weights=weights), ""),
-        (E.adaptation_luminance(rgb, robust=True, weights=weights), ""),
-        (E.desaturation_threshold(rgb, method=method, weights=weights), ""),
-    )
-    for est, unit in rows:
-        stats = ", ".join(f"{k} {_fmt(v)}" for k, v in est.statistics.items())
+
+    order: list[list[str]] = []  # each estimate's statistics in its own order (jit sorts)
+
+    @jax.jit
+    def estimates(rgb):  # one compiled call for all of them
+        out = (
+            E.jgt_key(rgb, percentile_method=method, weights=weights),
+            E.jgt_white(rgb, percentile_method=method, weights=weights),
+            E.log_average(rgb, weights=weights),
+            E.adaptation_luminance(rgb, weights=weights),
+            E.adaptation_luminance(rgb, robust=True, weights=weights),
+            E.desaturation_threshold(rgb, method=method, weights=weights),
+        )
+        order[:] = [list(e.statistics) for e in out]
+        return out
+
+    units = ("", " (scaled units)", "", "", "", "")
+    for est, unit, keys in zip(estimates(rgb), units, order, strict=True):
+        stats = ", ".join(f"{k} {_fmt(est.statistics[k])}" for k in keys)
         print(f"  {est.name}: {_fmt(est.value)}{unit}   ({stats})")
+
+
+def _measure_all(ops: list, rgb):
+    """``[op.measure(rgb) for op in ops]``, with the statistics measured once per setting
+    (``op.measure`` is ``op.bind(op.statistics(rgb))``)."""
+    stats: dict = {}
+    out = []
+    for op in ops:
+        settings = op.statistics_settings()
+        if settings is None:
+            out.append(op.measure(rgb))
+            continue
+        key = (tuple(settings), tuple(op.weights_))
+        if key not in stats:
+            stats[key] = op.statistics(rgb)
+        out.append(op.bind(stats[key]))
+    return out
 
 
 def _fmt(v) -> str:

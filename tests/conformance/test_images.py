@@ -5,7 +5,7 @@ smallest normal to the largest finite value of the dtype), in float16/float32/fl
 degenerate shapes and batches: finite where the input is finite (within the documented reach
 of a bad pixel), documented dtype and range, finite gradients with respect to the image and
 the Module parameters (float32; bad pixels and the scales of ``cases.GRAD_SCALES``),
-jit == eager, vmap == loop.
+jit == eager and vmap == loop (three natural frames in the float32 batch).
 
 All families of a case run as one batch: one compile (or one NumPy-side loop) per case and
 dtype, whatever the number of families."""
@@ -84,6 +84,18 @@ test reports them as xfailed (never as passed), fails on any other family, and f
 one of them is fixed so that the entry is removed."""
 
 
+def _check_eager_equals_vmap(name, case, frames, outs):
+    """The last ``len(frames)`` outputs of the compiled vmap equal eager calls frame by frame,
+    as users call the function (its own compiled paths, or op by op): jit equals eager and
+    the vmap batches frame by frame (each frame's statistics its own)."""
+    loop = [float_leaves(case.fn(x)) for x in frames]
+    vmapped = [np.asarray(v)[-len(frames) :] for v in float_leaves(outs)]
+    assert len(vmapped) == len(loop[0]), f"{name}: outputs differ"
+    for k, v in enumerate(vmapped):
+        ref = np.stack([e[k] for e in loop])
+        np.testing.assert_allclose(v, ref, rtol=RTOL32, atol=1e-6, err_msg=f"{name}: jit/vmap")
+
+
 @pytest.mark.parametrize(
     "name,dtype",
     [(n, np.dtype(d).type) for n in NAMES for d in CASES[n].dtypes],
@@ -96,9 +108,15 @@ def test_hard_families(name, dtype):
         # middle is covered by every traced case), so the suite stays within CI's time
         sweep = [k for k in cases if k.startswith("scale_")]
         cases = {k: v for k, v in cases.items() if k not in sweep[1:-1]}
-    batch = np.stack(list(cases.values()))
+    # float32 traced cases: three natural frames too, called eagerly one by one below
+    loop = case.jit and dtype == np.float32
+    frames = [natural((8, 8), seed=s) for s in range(3)] if loop else []
+    batch = np.stack(list(cases.values()) + frames)
     with enable_x64(dtype == np.float64):
         outs = _run(case, batch)
+    if loop:
+        _check_eager_equals_vmap(name, case, frames, outs)
+        outs = jax.tree_util.tree_map(lambda v: v[: len(cases)], outs)
     for leaf in float_leaves(outs) if case.jit else ():  # NumPy side: documented per function
         assert leaf.dtype == _expected_dtype(dtype), f"{name}: {dtype} in, {leaf.dtype} out"
     failed, known = [], []

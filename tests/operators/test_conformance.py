@@ -72,7 +72,9 @@ def test_hard_cases_stay_finite(name, dtype, request):
     op = make(name)
     cases = families(dtype)
     batch = np.stack(list(cases.values()))  # one compile: frames are independent
-    outs = np.asarray(eqx.filter_jit(lambda o, x: o(x))(op, batch))
+    # called as users call it: float16 is promoted before the operator's compiled function,
+    # which the float32 case then reuses (the same shape)
+    outs = np.asarray(op(batch))
     # half floats are computed and returned in the default float (float32 here)
     assert outs.dtype == (np.float32 if dtype == np.float16 else dtype)
     failed = []
@@ -82,8 +84,9 @@ def test_hard_cases_stay_finite(name, dtype, request):
         except AssertionError as e:  # every failing family, not only the first
             failed.append(str(e).splitlines()[0])
     assert not failed, f"{len(failed)} families: " + "; ".join(failed)
-    one = SINGLE_PIXEL.astype(dtype)
-    _check_outputs(name, "single_pixel", one, np.asarray(op(one)))
+    if dtype == np.float64:  # float16/32: the float32 program, test_conformance_shapes.py
+        one = SINGLE_PIXEL.astype(dtype)
+        _check_outputs(name, "single_pixel", one, np.asarray(op(one)))
     # +Inf luminance is white, -Inf black, a NaN channel makes the pixel NaN
     out = outs[list(cases).index("nan_and_inf")]
     np.testing.assert_array_equal(out[1, 2], 1.0)
