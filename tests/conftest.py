@@ -58,6 +58,6 @@ def _release_compiled_programs():
     """Drop the compiled programs after each test file: a test worker runs whole files in
     sequence, and one that kept every executable of hundreds of files (several GB, each
     with its own code mappings) crashed inside an XLA:CPU compile late in two full runs
-    (clearing only once a worker held 2 GiB was not faster: 29.5 min against 23.5)."""
+    (keeping them until a worker held 2 GiB showed no gain in one full run)."""
     yield
     jax.clear_caches()
