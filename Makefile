@@ -22,18 +22,14 @@ TEST_WORKERS ?= $(shell $(PYTHON) -c "import os; print(min(4, os.cpu_count() or 
 test: $(STAMP)
 	$(PY) -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=15
 
-# benchmarks measure the default environment users run in (no GLIBC_TUNABLES; the
-# committed results of 2026-11-22 were measured with glibc.malloc.hugetlb=1 and say so)
-BENCH_ENV :=
-
 # the full suite writes benchmarks/results/ and regenerates the README's performance section
 bench: $(STAMP)
-	$(BENCH_ENV) $(PY) benchmarks/run.py
+	$(PY) benchmarks/run.py
 	$(PY) benchmarks/report.py --readme README.md
 
 # a few minutes: small sizes, its own folder (the committed full results stay as they are)
 bench-quick: $(STAMP)
-	$(BENCH_ENV) $(PY) benchmarks/run.py --quick --out benchmarks/results/quick
+	$(PY) benchmarks/run.py --quick --out benchmarks/results/quick
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check hdrjax tests benchmarks

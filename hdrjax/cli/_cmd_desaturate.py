@@ -1,4 +1,5 @@
-"""``hdrjax desaturate INPUT -o OUTPUT.exr``: highlight desaturation (seed 000, section 4.2)."""
+"""``hdrjax desaturate INPUT -o OUTPUT.exr``: highlight desaturation (Birukov et al.,
+GraphiCon 2022, section 4.2)."""
 
 import argparse
 

@@ -44,7 +44,7 @@ def register(subparsers) -> None:
         "lights",
         help="find the light sources of an environment map (or a plain image)",
         description="Find the light sources of an equirectangular environment map (Loghin "
-        "2019, seed 001) or, with --method median-cut, Debevec's median-cut lights. Prints one "
+        "2019) or, with --method median-cut, Debevec's median-cut lights. Prints one "
         "line per light; --json writes directions, sizes and energy shares, -o draws them over "
         "the tone-mapped map (blue: local maxima, cyan: light centres, red: joined samples).",
     )

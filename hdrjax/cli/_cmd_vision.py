@@ -102,7 +102,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--perceptual",
         action="store_true",
-        help="for .png/.jpg/.tif: seed 002's perceptual colour-contrast "
+        help="for .png/.jpg/.tif: Budak and Petrovichev's (2005) perceptual colour-contrast "
         "reproduction (Budak2005) instead of --tonemap",
     )
     p.add_argument("--json", action="store_true", help="print the report as JSON")
