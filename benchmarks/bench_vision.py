@@ -33,8 +33,8 @@ import scipy.signal
 
 import hdrjax
 import hdrjax.vision as hv
+from hdrjax._photometry import rgb_to_xyz_matrix
 from hdrjax.vision import _spencer1995
-from hdrjax.vision._photometry import rgb_to_xyz_matrix
 
 PANORAMA = hv.View(hfov=360.0, vfov=180.0, projection="equiangular")
 BENCH = "vision"

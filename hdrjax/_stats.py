@@ -757,6 +757,21 @@ class Statistics(eqx.Module):
             raise ValueError("statistics: a band log-average needs histogram statistics")
         return _band_log_average(self, q_lo, q_hi)
 
+    def range_log_average(self, lo: float, hi: float) -> tuple[Array, Array]:
+        """``(exp(mean(ln L)), n)`` over the finite pixels with ``lo < L < hi`` (fixed
+        luminances, ``0 < lo < hi``: a visible range such as pcond's 1e-7–1e5 cd/m²); 1 and
+        0 when no pixel lies inside. From the histogram, so that the statistics of parts
+        merge to the whole's: every bin whose
+        geometric centre lies inside counts at that centre, so the mean ``ln L`` is within
+        one bin (a factor ``1 + 2^-m``, :func:`rel_error_bound`) of the exact one. The
+        statistics of one image (with ``source``) have the exact mean's derivative in the
+        pixels; merged ones are constants for ``jax.grad``. Histogram statistics only."""
+        if self.counts is None:
+            raise ValueError("statistics: a range log-average needs histogram statistics")
+        if not 0 < lo < hi:
+            raise ValueError(f"lo, hi: expected 0 < lo < hi, got {lo!r}, {hi!r}")
+        return _range_log_average(self, float(lo), float(hi))
+
     def luminance_stats(self) -> LuminanceStats:
         """Percentiles, log-averages and extrema (:class:`LuminanceStats`) from these
         statistics; histogram percentiles within ``rel_error_bound``."""
@@ -830,6 +845,40 @@ class Statistics(eqx.Module):
         vals = _from_counts(self.counts, qs.reshape(-1), minpos, mx, self.m)[0].reshape(qs.shape)
         err = jnp.asarray(rel_error_bound(self.m, dt), dt)
         return jnp.where(any_pos, vals, jnp.nan), jnp.where(any_pos, err, 0.0)
+
+
+def _range_log_average(st: Statistics, lo: float, hi: float) -> tuple[Array, Array]:
+    """:meth:`Statistics.range_log_average` (histogram statistics)."""
+    dt = st.min.dtype
+    e_lo, e_hi = _bin_edges(st.m, dt)
+    centre = 0.5 * (e_lo + e_hi)
+    inside = (centre > math.log(lo)) & (centre < math.log(hi))
+    inside = inside & (jnp.arange(centre.shape[0]) >= (1 << st.m))  # not zero/subnormal
+    counts = jnp.where(inside, st.counts, 0)
+    n = jnp.sum(counts)
+    mean_ln = jnp.sum(counts.astype(dt) * centre) / jnp.maximum(n, 1).astype(dt)
+    if st.source is not None:  # one image: the derivative of the exact mean
+        mean_ln = _range_log_mean(st.source, lo, hi, mean_ln)
+    else:
+        mean_ln = jax.lax.stop_gradient(mean_ln)
+    value = jnp.exp(jnp.minimum(mean_ln, ln_max_of(dt)))
+    return jnp.where(n > 0, value, 1.0), n
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(1, 2))
+def _range_log_mean(L: Array, lo: float, hi: float, estimate: Array) -> Array:
+    """``estimate`` (the histogram's mean ``ln L`` over ``lo < L < hi``) with the derivative
+    of the plain formula in ``L``, as an exact pass gives."""
+    return jax.lax.stop_gradient(estimate)
+
+
+@_range_log_mean.defjvp
+def _range_log_mean_jvp(lo, hi, primals, tangents):
+    (L, est), (t, _) = primals, tangents
+    kept = (L > lo) & (L < hi)
+    n = jnp.maximum(jnp.sum(kept), 1).astype(L.dtype)
+    slope = 1.0 / jnp.where(kept, L, 1.0)
+    return _range_log_mean(L, lo, hi, est), jnp.sum(jnp.where(kept, t * slope, 0.0)) / n
 
 
 def _band_log_average(st: Statistics, q_lo: float, q_hi: float):

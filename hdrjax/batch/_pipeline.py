@@ -200,7 +200,14 @@ class Pipeline(eqx.Module):
     def with_weights(self, weights: tuple[float, float, float]) -> "Pipeline":
         """The pipeline with the operator's luminance weights set to a file's primaries."""
         op = self.operator
-        if "weights" not in {f.name for f in dataclasses.fields(op)} or weights == op.weights_:
+        names = {f.name for f in dataclasses.fields(op)}
+        if "weights" not in names and "chromaticities" in names and weights != op.weights_:
+            raise ValueError(
+                f"{op.name} needs the frames' primaries, not only their luminance weights"
+                f" {weights}: set its chromaticities to the files' (or convert the frames"
+                " to Rec.709 first)"
+            )
+        if "weights" not in names or weights == op.weights_:
             return self
         return dataclasses.replace(self, operator=dataclasses.replace(op, weights=weights))
 

@@ -2,7 +2,7 @@
 
 import argparse
 
-from ._cmd_tonemap import describe, load_rgb, with_weights
+from ._cmd_tonemap import describe, load_rgb, with_file_weights
 from ._common import positive_float
 
 
@@ -87,7 +87,9 @@ def run(args: argparse.Namespace) -> int:
     # every operator that declares an estimated parameter, bound in one compiled call to
     # statistics measured once per statistics setting (most operators share one)
     classes = [get_operator(name) for name in operator_names()]
-    ops = [with_weights(c(), wts) for c in classes if any(i.estimated for i in parameter_info(c))]
+    ops = [
+        with_file_weights(c(), img) for c in classes if any(i.estimated for i in parameter_info(c))
+    ]
     all_measured = eqx.filter_jit(_measure_all)(ops, jnp.asarray(rgb))
     for op, measured in zip(ops, all_measured, strict=True):
         text = describe(measured).splitlines()

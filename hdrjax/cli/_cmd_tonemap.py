@@ -339,8 +339,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def with_file_weights(op, img):
-    """The operator with the file's luminance weights (operators that have a setting)."""
-    return with_weights(op, img.luminance_weights)
+    """The operator with the file's luminance weights (operators that have a setting) and
+    primaries (operators that declare ``chromaticities``: their colour matrix)."""
+    import dataclasses
+
+    op = with_weights(op, img.luminance_weights)
+    if "chromaticities" in {f.name for f in dataclasses.fields(op)}:
+        op = dataclasses.replace(op, chromaticities=img.chromaticities)
+    return op
 
 
 def with_weights(op, weights):

@@ -23,6 +23,11 @@ from ._base import (
     tonemap as tonemap,
     weights_field as weights_field,
 )
+from ._budak2005 import (
+    AbstractContrastSpace as AbstractContrastSpace,
+    Budak2005 as Budak2005,
+    ConeOpponentSpace as ConeOpponentSpace,
+)
 from ._classic import (
     Exponential as Exponential,
     ExponentiationMapping as ExponentiationMapping,

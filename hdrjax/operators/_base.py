@@ -210,6 +210,22 @@ def parameter(
     return eqx.field(converter=converter, static=static, metadata={_META: info}, **kw)
 
 
+def estimated(
+    help: str,
+    *,
+    pooling: str,
+    unit: str = "",
+    range: str = "(0, inf)",
+    shape: tuple[int, ...] | None = (),
+) -> Any:
+    """A parameter estimated from the image: :func:`parameter` with default ``None``
+    ("measure this image"), ``estimated=True`` and how the values of several frames pool
+    (``"mean"``, ``"log_mean"``, ``"max"``, ``"min"``); positive by default."""
+    return parameter(
+        None, help=help, unit=unit, range=range, estimated=True, pooling=pooling, shape=shape
+    )
+
+
 def as_float_image(rgb: ArrayLike, name: str = "rgb") -> Array:
     """Validate ``(..., H, W, 3)`` and promote to float32/float64 (float16/ints → float32).
     ``name``: the caller's argument name, which the messages start with."""
@@ -367,6 +383,10 @@ class AbstractOperator(eqx.Module):
     operator maps luminance with the ``weights`` of the image's primaries."""
     default_fit_params: ClassVar[tuple[str, ...]] = ()
     """What ``hdrjax fit`` fits when no ``--param`` is given."""
+    rounding: ClassVar[float] = 1e-6
+    """Absolute error (display units) of float32 results from rounding alone: two
+    evaluations that differ only in the order of operations (compiled against eager, merged
+    statistics against the whole image's) agree to this."""
     only_feeds: ClassVar[dict[str, str]] = {}
     """Parameters whose only use is to estimate another one when that one is unset:
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
@@ -806,6 +826,7 @@ __all__ = [
     "bound_stats",
     "count_valid",
     "dispatch",
+    "estimated",
     "fill",
     "finish",
     "get_operator",

@@ -30,6 +30,7 @@ from ._base import (
     StatisticsSettings,
     bound_stats,
     checked_statistics,
+    estimated,
     fill,
     max_luminance,
     parameter,
@@ -50,12 +51,9 @@ SCHLICK1994 = (
 
 def _l_max(unit: str = "image units") -> Any:
     """The image's largest finite luminance, measured when ``None``."""
-    return parameter(
-        None,
-        help="luminance mapped to display white; None: the image's largest finite luminance",
+    return estimated(
+        "luminance mapped to display white; None: the image's largest finite luminance",
         unit=unit,
-        range="(0, inf)",
-        estimated=True,
         pooling="max",
     )
 
@@ -180,12 +178,9 @@ class Exponential(AbstractLuminanceCurve):
 
     q: Array = parameter(1.0, help="multiplier of L (brightness)", range="[1, inf)")
     k: Array = parameter(1.0, help="multiplier of the log-average (darkens)", range="[1, inf)")
-    log_average: Array | None = parameter(
-        None,
-        help="log-average luminance L_a; None: measured (offset: float64 machine epsilon)",
+    log_average: Array | None = estimated(
+        "log-average luminance L_a; None: measured (offset: float64 machine epsilon)",
         unit="image units",
-        range="(0, inf)",
-        estimated=True,
         pooling="log_mean",
     )
     weights: tuple[float, float, float] = weights_field()
@@ -306,38 +301,26 @@ class Reinhard2004(AbstractOperator):
     c: Array = parameter(
         0.0, help="chromatic adaptation (0: luminance, 1: per channel)", range="[0, 1]"
     )
-    channel_average: Array | None = parameter(
-        None,
-        help="mean of each channel (R, G, B); None: measured",
+    channel_average: Array | None = estimated(
+        "mean of each channel (R, G, B); None: measured",
         unit="image units",
         range="[0, inf)",
-        estimated=True,
         pooling="mean",
         shape=(3,),
     )
-    log_average: Array | None = parameter(
-        None,
-        help="log-average luminance; None: measured (offset: float64 machine epsilon)",
+    log_average: Array | None = estimated(
+        "log-average luminance; None: measured (offset: float64 machine epsilon)",
         unit="image units",
-        range="(0, inf)",
-        estimated=True,
         pooling="log_mean",
     )
-    L_min: Array | None = parameter(
-        None,
-        help="smallest luminance (automatic m); None: measured",
+    L_min: Array | None = estimated(
+        "smallest luminance (automatic m); None: measured",
         unit="image units",
         range="[0, inf)",
-        estimated=True,
         pooling="min",
     )
-    L_max: Array | None = parameter(
-        None,
-        help="largest luminance (automatic m); None: measured",
-        unit="image units",
-        range="(0, inf)",
-        estimated=True,
-        pooling="max",
+    L_max: Array | None = estimated(
+        "largest luminance (automatic m); None: measured", unit="image units", pooling="max"
     )
     weights: tuple[float, float, float] = weights_field()
 

@@ -21,6 +21,7 @@ from ._base import (
     AbstractLuminanceCurve,
     StatisticsSettings,
     bound_stats,
+    estimated,
     max_luminance,
     parameter,
     register,
@@ -65,13 +66,10 @@ class Linear(AbstractLuminanceCurve):
         ("exposure_time", "f_number", "iso", "ev100"), "L_max"
     )
 
-    L_max: Array | None = parameter(
-        None,
-        help="luminance mapped to white; None: from the exposure settings, else the image's"
+    L_max: Array | None = estimated(
+        "luminance mapped to white; None: from the exposure settings, else the image's"
         " largest finite luminance",
         unit="image units (cd/m² for absolute images)",
-        range="(0, inf)",
-        estimated=True,
         pooling="max",
     )
     exposure_time: Array | None = parameter(

@@ -44,6 +44,7 @@ from ._base import (
     AbstractLuminanceCurve,
     StatisticsSettings,
     bound_stats,
+    estimated,
     fill,
     parameter,
     register,
@@ -61,35 +62,26 @@ REFERENCE = (
 
 def key_parameter() -> Any:
     """The key ``a`` (JGT Eq. 4 when ``None``), shared by the Reinhard 2002 operators."""
-    return parameter(
-        None,
-        help="the key a (0.18 is the paper's default); None: JGT 2002 Eq. 4 estimate",
-        range="(0, inf)",
-        estimated=True,
-        pooling="log_mean",
+    return estimated(
+        "the key a (0.18 is the paper's default); None: JGT 2002 Eq. 4 estimate", pooling="log_mean"
     )
 
 
 def white_parameter() -> Any:
     """``L_white`` in scaled units (JGT Eq. 5 when ``None``)."""
-    return parameter(
-        None,
-        help="smallest scaled luminance mapped to white (inf: L / (1 + L)); None: JGT 2002 Eq. 5",
+    return estimated(
+        "smallest scaled luminance mapped to white (inf: L / (1 + L)); None: JGT 2002 Eq. 5",
         unit="scaled units",
         range="(0, inf]",
-        estimated=True,
         pooling="log_mean",
     )
 
 
 def log_average_parameter() -> Any:
     """The log-average ``L̄_w`` (measured with ``delta`` when ``None``)."""
-    return parameter(
-        None,
-        help="log-average luminance L̄_w; None: measured with delta",
+    return estimated(
+        "log-average luminance L̄_w; None: measured with delta",
         unit="image units",
-        range="(0, inf)",
-        estimated=True,
         pooling="log_mean",
     )
 

@@ -29,6 +29,7 @@ from ._base import (
     Prepared,
     StatisticsSettings,
     bound_stats,
+    estimated,
     fill,
     parameter,
     register,
@@ -260,12 +261,10 @@ class Reinhard2002Auto(AbstractOperator):
     percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
     bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
-    local: Array | None = parameter(
-        None,
-        help="1: the local operator, 0: the global one; None: the local one where the image"
+    local: Array | None = estimated(
+        "1: the local operator, 0: the global one; None: the local one where the image"
         " spans more than zones stops",
         range="[0, 1]",
-        estimated=True,
         pooling="max",
     )
 

@@ -30,6 +30,7 @@ from ._base import (
     AbstractLuminanceCurve,
     StatisticsSettings,
     checked_statistics,
+    estimated,
     fill,
     max_luminance,
     parameter,
@@ -47,13 +48,8 @@ TUMBLIN1999 = (
 
 
 def _world_adaptation():
-    return parameter(
-        None,
-        help="world adaptation luminance; None: measured (adaptation)",
-        unit="cd/m²",
-        range="(0, inf)",
-        estimated=True,
-        pooling="log_mean",
+    return estimated(
+        "world adaptation luminance; None: measured (adaptation)", unit="cd/m²", pooling="log_mean"
     )
 
 
@@ -216,20 +212,13 @@ class TumblinReinhard(_AbstractTumblin):
     only_feeds: ClassVar[dict[str, str]] = {"L_max": "L_white"}
 
     L_wa: Array | None = _world_adaptation()
-    L_max: Array | None = parameter(
-        None,
-        help="largest world luminance not clipped; None: the image maximum",
-        unit="cd/m²",
-        range="(0, inf)",
-        estimated=True,
-        pooling="max",
+    L_max: Array | None = estimated(
+        "largest world luminance not clipped; None: the image maximum", unit="cd/m²", pooling="max"
     )
-    L_white: Array | None = parameter(
-        None,
-        help="formula 2's white; None: T(L_max) / L_dmax",
+    L_white: Array | None = estimated(
+        "formula 2's white; None: T(L_max) / L_dmax",
         unit="display units",
         range="(0, inf]",
-        estimated=True,
         pooling="log_mean",
     )
     L_dmax: Array = parameter(

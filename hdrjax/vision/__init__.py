@@ -21,15 +21,22 @@ cd/m² after ``contrast``; :class:`Budak2005` returns display values in [0, 1]).
   :func:`contrast_scale`, :func:`ward1994_scale`, :func:`fechner_brightness`.
 """
 
-from ._acuity import acuity_loss as acuity_loss, sample_spacing as sample_spacing
-from ._budak2005 import (
+from .._photometry import (
+    BOT_MESOPIC as BOT_MESOPIC,
+    LMAX as LMAX,
+    LMIN as LMIN,
+    SWNORM as SWNORM,
+    TOP_MESOPIC as TOP_MESOPIC,
+    scotopic_luminance as scotopic_luminance,
+)
+from ..operators._budak2005 import (
     AbstractContrastSpace as AbstractContrastSpace,
-    Budak2005 as Budak2005,
     ConeOpponentSpace as ConeOpponentSpace,
     fechner_brightness as fechner_brightness,
     fechner_luminance as fechner_luminance,
-    perceptual_reproduction as perceptual_reproduction,
 )
+from ._acuity import acuity_loss as acuity_loss, sample_spacing as sample_spacing
+from ._budak2005 import Budak2005 as Budak2005, perceptual_reproduction as perceptual_reproduction
 from ._contrast import (
     DISPLAY_MAX as DISPLAY_MAX,
     DISPLAY_RANGE as DISPLAY_RANGE,
@@ -46,14 +53,6 @@ from ._pcond import (
     mesopic_weight as mesopic_weight,
     tvi as tvi,
     veil as veil,
-)
-from ._photometry import (
-    BOT_MESOPIC as BOT_MESOPIC,
-    LMAX as LMAX,
-    LMIN as LMIN,
-    SWNORM as SWNORM,
-    TOP_MESOPIC as TOP_MESOPIC,
-    scotopic_luminance as scotopic_luminance,
 )
 from ._report import EFFECTS as EFFECTS, Decision as Decision, SceneReport as SceneReport
 from ._simulate import (

@@ -24,9 +24,9 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._colour import luminance
+from .._photometry import LMIN, check_rgb, chroma_key, restore, sanitize, weights_of
 from ._fovea import block_mean, mean2x2, upsample
 from ._pcond import acuity
-from ._photometry import LMIN, check_rgb, chroma_key, restore, sanitize, weights_of
 from ._view import ResolvedView, View, resolve_view
 
 

@@ -25,8 +25,8 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._photometry import LMIN, check_rgb, restore, sanitize
 from ._pcond import tvi
-from ._photometry import LMIN, check_rgb, restore, sanitize
 
 ContrastModel = Literal["pcond", "ward1994"]
 

@@ -14,7 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from ._photometry import log10_floor
+from .._photometry import log10_floor
 
 
 def tvi_photopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:

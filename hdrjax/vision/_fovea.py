@@ -19,8 +19,8 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._interp import lerp
+from .._photometry import LMAX, LMIN
 from .._stats import accurate_sum
-from ._photometry import LMAX, LMIN
 
 
 def block_sums(x: Array, w: Array, by: int, bx: int) -> tuple[Array, Array]:

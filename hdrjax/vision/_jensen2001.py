@@ -23,8 +23,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._scale import at_scale
-from ._photometry import (
+from .._photometry import (
     check_rgb,
     chroma_key,
     headroom,
@@ -36,6 +35,7 @@ from ._photometry import (
     scotopic_unscaled,
     xyz_to_rgb,
 )
+from .._scale import at_scale
 
 BLUE_WHITE = (0.25, 0.25)
 """Chromaticity (x, y) towards which night vision shifts (Jensen et al. 2001)."""

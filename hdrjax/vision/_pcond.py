@@ -19,10 +19,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import _check
 from .._colour import luminance
 from .._interp import lerp
-from .._scale import at_scale
-from . import _fft
-from ._fovea import block_mean, upsample
-from ._photometry import (
+from .._photometry import (
     BOT_MESOPIC,
     LMIN,
     SWNORM,
@@ -34,36 +31,18 @@ from ._photometry import (
     restore,
     sanitize,
     scotopic_unscaled,
+    tvi,
     weights_of,
 )
+from .._scale import at_scale
+from . import _fft
+from ._fovea import block_mean, upsample
 from ._view import ResolvedView, View, resolve_view
 
 VADAPT = 0.08
 """Fraction of adaptation due to the veil (pcond4.c ``VADAPT``)."""
 VEIL_RANGE = 4.5
 """pcond applies the veil only if the scene's ``ln`` range is at least this (about 90:1)."""
-
-
-def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
-    """Combined rod/cone threshold ``ΔL(L_a)`` in cd/m² (pcond3.c ``htcontrs``).
-
-    From Ferwerda et al. 1996: ``1.38e-3`` below ``L_a = 1.148e-4``; otherwise
-    ``10^y`` with ``x = log10 L_a`` and ``y = (0.405x + 1.6)^2.18 - 2.86`` for
-    ``x < -1.44``, ``x - 0.395`` for ``x < -0.0184``, ``(0.249x + 0.65)^2.7 - 0.72`` for
-    ``x < 1.9`` and ``x - 1.255`` above.
-
-    Example:
-        >>> round(float(tvi(1.0)), 4)  # cone branch at x = 0: 10**(0.65**2.7 - 0.72)
-        0.3913
-    """
-    _check.real(L_a, "L_a")
-    L_a = _check.as_float(L_a)
-    x = log10_floor(L_a, 1.148e-4)
-    rod = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
-    cone = (0.249 * jnp.clip(x, -0.0184, 1.9) + 0.65) ** 2.7 - 0.72
-    y = jnp.where(x < -1.44, rod, jnp.where(x < -0.0184, x - 0.395, cone))
-    y = jnp.where(x < 1.9, y, x - 1.255)
-    return jnp.where(L_a < 1.148e-4, 1.38e-3, 10.0**y)
 
 
 def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:

@@ -54,11 +54,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._colour import luminance
+from .._photometry import LMAX, LMIN, TOP_MESOPIC
 from ._contrast import WEBER_ONSET
 from ._fovea import block_reduce, pixel_stride
 from ._jensen2001 import LOG_HIGH
 from ._pcond import VEIL_RANGE
-from ._photometry import LMAX, LMIN, TOP_MESOPIC
 from ._spencer1995 import variant_for
 from ._view import ResolvedView
 

@@ -33,6 +33,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import luminance
+from .._photometry import LMIN, check_rgb, chroma_key, weights_of
 from ..operators._base import AbstractLuminanceCurve, AbstractOperator, make_operator
 from ..operators._call import clean_operator_call
 from ._acuity import acuity_loss, max_levels
@@ -40,7 +41,6 @@ from ._contrast import DISPLAY_MAX, DISPLAY_RANGE, ContrastModel, contrast
 from ._fovea import adaptation_luminance, pixel_stride
 from ._jensen2001 import blue_shift
 from ._pcond import colour_loss, veil
-from ._photometry import LMIN, check_rgb, chroma_key, weights_of
 from ._report import (
     EFFECTS,
     SceneReport,

@@ -46,8 +46,8 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._photometry import BOT_MESOPIC, TOP_MESOPIC, check_rgb, restore, sanitize
 from . import _fft
-from ._photometry import BOT_MESOPIC, TOP_MESOPIC, check_rgb, restore, sanitize
 from ._view import ResolvedView, View, resolve_view
 
 Variant = Literal["photopic", "mesopic", "scotopic"]

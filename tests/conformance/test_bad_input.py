@@ -41,7 +41,7 @@ PROMOTION_VALUES = {
     # one traced case per promotion path (compiles: the others are traced, not compiled)
     "luminance",  # hdrjax._colour
     "estimate.log_average",  # operators/_base.as_float_image
-    "vision.glare",  # vision/_photometry.check_rgb
+    "vision.glare",  # _photometry.check_rgb
     "filters.mean_filter[nearest]",  # filters/_api.float_image
     "panorama.sample_bilinear",  # arithmetic with float weights
     "encode_srgb",  # display/_encode

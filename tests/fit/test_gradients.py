@@ -44,6 +44,8 @@ NOT_DIFFERENTIABLE = {
     "gamma_log": "choice of logarithm in formula 1 (string)",
     "interpolation": "choice of interpolant (string)",
     "q": "linear: ISO 12232 lens constant (a static float; other operators' q is a parameter)",
+    "space": "budak2005: the colour-contrast model (a module, not a number)",
+    "chromaticities": "budak2005: the file's primaries (a tuple fixed by the file)",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
@@ -59,6 +61,11 @@ R2004 = dict(f=0.5, m=0.6, a=0.3, c=0.4, channel_average=[0.2, 0.3, 0.25], log_a
 # matter here: the test also checks each gradient is non-zero). Values are away from the
 # kinks of max(q, 1), where(m > 0) and where(L_wa > 100).
 CASES = [
+    (
+        "budak2005",
+        dict(display_max=80.0, adaptation=0.5, background=[0.3, 0.25, 0.2]),
+        ("display_max", "adaptation", "background"),
+    ),
     ("exponential", dict(q=1.5, k=1.2, log_average=0.05), ("q", "k", "log_average")),
     ("exponentiation_mapping", dict(p=0.8, q=1.3, L_max=12.0), ("p", "q", "L_max")),
     (

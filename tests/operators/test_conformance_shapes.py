@@ -49,10 +49,11 @@ def test_jit_equals_eager_and_vmap_equals_loop(name):
     frames = np.stack([natural(seed=s) for s in range(3)])
     eager = np.stack([np.asarray(op(f)) for f in frames])
     jitted = np.asarray(eqx.filter_jit(lambda o, x: o(x))(op, frames))
-    np.testing.assert_allclose(jitted, eager, rtol=RTOL32, atol=1e-6)
+    atol = max(1e-6, op.rounding)  # budak2005: its colour transforms' conditioning
+    np.testing.assert_allclose(jitted, eager, rtol=RTOL32, atol=atol)
     # batch shape does not matter: (3, H, W, 3) vs (3, 1, H, W, 3)
     nested = np.asarray(op(frames[:, None]))[:, 0]
-    np.testing.assert_allclose(nested, eager, rtol=RTOL32, atol=1e-6)
+    np.testing.assert_allclose(nested, eager, rtol=RTOL32, atol=atol)
     # and each frame's statistics are its own
     assert not np.allclose(eager[0], np.asarray(op(frames[1])))
 

@@ -5,6 +5,7 @@ mapping, default fit parameters, tile halo; and the range checks of ``make_opera
 import dataclasses
 import math
 
+import equinox as eqx
 import jax
 import numpy as np
 import pytest
@@ -24,7 +25,8 @@ def test_every_parameter_is_described(name):
     for info in infos:
         where = f"{name}.{info.name}"
         assert info.help and "\n" not in info.help, where
-        numeric = info.choices is None and not isinstance(info.default, tuple)
+        # settings that are not numbers: names (choices), tuples, models (a colour space)
+        numeric = info.choices is None and not isinstance(info.default, (tuple, eqx.Module))
         if numeric:  # every number (scalar, vector or table) has a valid range
             assert info.range is not None and info.range[0] < info.range[1], where
             if not info.required and info.default is not None:
@@ -39,8 +41,9 @@ def test_every_parameter_is_described(name):
             assert info.default is None and not info.static, where
             assert info.pooling in ("mean", "log_mean", "max", "min"), where
     assert cls.reference, name
-    # the per-channel operators are the ones without luminance weights
-    assert cls.per_channel == ("weights" not in init), name
+    # the per-channel operators are the ones without luminance weights (or primaries,
+    # which give the weights and the colour matrix: budak2005)
+    assert cls.per_channel == ("weights" not in init and "chromaticities" not in init), name
     fields = {i.name: i for i in infos}
     for p in cls.default_fit_params:
         assert p in fields and not fields[p].static, f"{name}: fits {p}"

@@ -6,27 +6,11 @@ import numpy as np
 import pytest
 
 import hdrjax.vision as hv
-from hdrjax.vision._budak2005 import HPE
-from hdrjax.vision._photometry import rgb_to_xyz, rgb_to_xyz_matrix
+from hdrjax._photometry import rgb_to_xyz, rgb_to_xyz_matrix
+from hdrjax.operators._budak2005 import HPE
 
 from ..conftest import RTOL32, RTOL64
-
-
-def np_tvi(L):
-    import math
-
-    x = math.log10(L)
-    if L < 1.148e-4:
-        return 1.38e-3
-    if x < -1.44:
-        y = (0.405 * x + 1.6) ** 2.18 - 2.86
-    elif x < -0.0184:
-        y = x - 0.395
-    elif x < 1.9:
-        y = (0.249 * x + 0.65) ** 2.7 - 0.72
-    else:
-        y = x - 1.255
-    return 10**y
+from ._reference import np_tvi
 
 
 def colourful(h=8, w=12, level=1.0, seed=0):

@@ -9,7 +9,7 @@ import pytest
 import scipy.signal
 
 import hdrjax.vision as hv
-from hdrjax.vision._photometry import rgb_to_xyz_matrix
+from hdrjax._photometry import rgb_to_xyz_matrix
 
 from ..conftest import RTOL32, RTOL64
 

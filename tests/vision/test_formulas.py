@@ -12,9 +12,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import hdrjax.vision as hv
-from hdrjax.vision._photometry import rgb_to_xyz_matrix
+from hdrjax._photometry import rgb_to_xyz_matrix
 
 from ..conftest import RTOL32, RTOL64
+from ._reference import np_tvi
 
 
 @np.errstate(invalid="ignore")  # the unused branches of np.where
@@ -31,25 +32,6 @@ def np_ts(La):  # Ferwerda 1996 rods
     return 10.0 ** np.where(
         x <= -3.94, -2.86, np.where(x >= -1.44, x - 0.395, (0.405 * x + 1.6) ** 2.18 - 2.86)
     )
-
-
-def np_htcontrs(La):  # pcond3.c
-    out = []
-    for L in np.atleast_1d(La):
-        if L < 1.148e-4:
-            out.append(1.38e-3)
-            continue
-        x = math.log10(L)
-        if x < -1.44:
-            y = (0.405 * x + 1.6) ** 2.18 - 2.86
-        elif x < -0.0184:
-            y = x - 0.395
-        elif x < 1.9:
-            y = (0.249 * x + 0.65) ** 2.7 - 0.72
-        else:
-            y = x - 1.255
-        out.append(10.0**y)
-    return np.array(out)
 
 
 @pytest.mark.usefixtures("x64")
@@ -74,7 +56,7 @@ def test_pcond_combined_tvi():
         [[0.0, 1e-5, 1e-3, 0.1, 0.5, 1.0, 1e3, 1e6]]
         + [b * e for b in (1.148e-4, 10**-1.44, 10**-0.0184, 10**1.9)]
     )
-    np.testing.assert_allclose(hv.tvi(La), np_htcontrs(La), rtol=RTOL64)
+    np.testing.assert_allclose(hv.tvi(La), np_tvi(La), rtol=RTOL64)
     # rods hand over to cones at 10**-0.0184 = 0.958 cd/m² (formulas.md §3.8)
     assert float(hv.tvi(10**-0.0184 * 0.999)) == pytest.approx(0.958 * 0.999 * 10**-0.395, 1e-3)
 
@@ -137,9 +119,7 @@ def test_ward1994_and_pcond_contrast_scale():
     # pcond: L_da = geometric mean of the display range, default 100 cd/m² over 32:1
     Lda_p = 100.0 / math.sqrt(32.0)
     assert hv.display_adaptation("pcond") == pytest.approx(Lda_p)
-    np.testing.assert_allclose(
-        hv.contrast_scale(Lwa), np_htcontrs(Lda_p)[0] / np_htcontrs(Lwa), rtol=RTOL64
-    )
+    np.testing.assert_allclose(hv.contrast_scale(Lwa), np_tvi(Lda_p) / np_tvi(Lwa), rtol=RTOL64)
     # above the cone Weber onset, the visibility scale is the luminance scale times a constant
     m1, m2 = (float(hv.contrast_scale(L)) for L in (100.0, 1000.0))
     assert m1 / m2 == pytest.approx(10.0, rel=RTOL64)
@@ -205,7 +185,7 @@ def test_glare_kernel_matches_psf_integral_away_from_centre():
 def test_fechner_brightness_and_inverse():
     L = np.array([1e-3, 0.1, 1.0, 10.0, 1e4])
     La = 2.0
-    expect = La / np_htcontrs(La)[0] * np.log(L / La)
+    expect = La / np_tvi(La) * np.log(L / La)
     np.testing.assert_allclose(hv.fechner_brightness(L, La), expect, rtol=RTOL64)
     np.testing.assert_allclose(hv.fechner_luminance(expect, La), L, rtol=RTOL64)
 

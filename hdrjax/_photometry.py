@@ -1,4 +1,5 @@
-"""Photometric constants and colour conversions shared by the vision effects.
+"""Photometric constants, the threshold-versus-intensity curve and colour conversions
+shared by the vision effects and the Budak 2005 operator.
 
 Numeric contract: linear RGB in absolute units (cd/m²), channels last, any primaries given
 as an OpenEXR-style ``chromaticities`` 8-tuple (Rec.709/sRGB with D65 when ``None``).
@@ -17,9 +18,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
-from .._colour import REC709_CHROMATICITIES, luminance, luminance_weights
-from .._scale import at_scale, inverse_pow2
+from . import _check
+from ._colour import REC709_CHROMATICITIES, luminance, luminance_weights
+from ._scale import at_scale, inverse_pow2
 
 LMIN = 1e-7
 """Smallest visible world luminance, cd/m² (pcond.h ``LMIN``)."""
@@ -59,6 +60,28 @@ def log10_floor(L: Array, floor: float) -> Array:
     luminance (Ferwerda et al. 1996; pcond's ``LMIN``)."""
     ok = L > floor
     return jnp.where(ok, jnp.log10(jnp.where(ok, L, 1.0)), jnp.log10(floor))
+
+
+def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Combined rod/cone threshold ``ΔL(L_a)`` in cd/m² (pcond3.c ``htcontrs``).
+
+    From Ferwerda et al. 1996: ``1.38e-3`` below ``L_a = 1.148e-4``; otherwise
+    ``10^y`` with ``x = log10 L_a`` and ``y = (0.405x + 1.6)^2.18 - 2.86`` for
+    ``x < -1.44``, ``x - 0.395`` for ``x < -0.0184``, ``(0.249x + 0.65)^2.7 - 0.72`` for
+    ``x < 1.9`` and ``x - 1.255`` above.
+
+    Example:
+        >>> round(float(tvi(1.0)), 4)  # cone branch at x = 0: 10**(0.65**2.7 - 0.72)
+        0.3913
+    """
+    _check.real(L_a, "L_a")
+    L_a = _check.as_float(L_a)
+    x = log10_floor(L_a, 1.148e-4)
+    rod = (0.405 * jnp.clip(x, -3.94, -1.44) + 1.6) ** 2.18 - 2.86
+    cone = (0.249 * jnp.clip(x, -0.0184, 1.9) + 0.65) ** 2.7 - 0.72
+    y = jnp.where(x < -1.44, rod, jnp.where(x < -0.0184, x - 0.395, cone))
+    y = jnp.where(x < 1.9, y, x - 1.255)
+    return jnp.where(L_a < 1.148e-4, 1.38e-3, 10.0**y)
 
 
 def chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | None:
@@ -245,5 +268,6 @@ __all__ = [
     "rgb_to_xyz_matrix",
     "sanitize",
     "scotopic_luminance",
+    "tvi",
     "xyz_to_rgb",
 ]
