@@ -1,6 +1,6 @@
 """``read`` and ``write``: one entry point for EXR, Radiance and PFM files, with sidecars.
 
-Sidecar convention (seed 000, section 3): a simulation may put some layers, and other
+Sidecar convention (Birukov et al. 2022, section 3): a simulation may put some layers, and other
 quantities of the same camera, in files that share the main file's name and differ only
 in their extension:
 

@@ -30,7 +30,7 @@ from jaxtyping import Float
 from .._colour import luminance_weights as _luminance_weights
 from ._errors import LayerShapeError, MissingLayerError, ReadError
 
-# Layer names fixed for the known kinds of data (seed 000, section 3).
+# Layer names fixed for the known kinds of data (Birukov et al. 2022, section 3).
 ERROR = "error"
 """Per-pixel estimate of the calculation error (grid, ``(H, W)``, same unit as the image
 unless the file says it is relative)."""

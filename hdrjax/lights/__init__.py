@@ -1,9 +1,9 @@
 """Light sources in environment maps and images (issue 6).
 
-- :func:`detect` — Loghin 2019 (seed 001) detection on an equirectangular map, vectorised
+- :func:`detect` — Loghin 2019 detection on an equirectangular map, vectorised
   and compiled; :func:`detect_image` on a plain image; :func:`detect_cubemap` on a cube map.
 - :func:`median_cut` — Debevec 2005 median-cut light extraction, for comparison.
-- :func:`plot_lights` — the seed's figures (local maxima, light positions, joined samples).
+- :func:`plot_lights` — Loghin 2019's figures (local maxima, light positions, joined samples).
 - Directions: hdrjax's convention is :mod:`hdrjax.panorama`'s (Y-up, looking along −Z,
   +X right; azimuth/elevation as in ``SOURCES.md``); :func:`convert_direction` gives
   Blender, pbrt, Mitsuba and OpenEXR directions, :func:`to_z_up` / :func:`to_y_up` swap

@@ -2,15 +2,14 @@
 
 Reference:
     D.-A. Loghin, "Detection of light sources from environment maps", 2019,
-    http://alinloghin.com/articles/env_lights.html (Russian translation with the Python
-    listings: ``../shared/seeds/001_*.txt``).
+    http://alinloghin.com/articles/env_lights.html (with Python listings).
 
 Numeric contract: input is linear RGB (relative or absolute; LDR maps in [0, 1] are
 treated as linear), channels last, any float dtype (float16 is computed in float32).
 Pixels with a NaN/±Inf channel are excluded (zero), negative values are clamped to zero.
 Outputs are float32, or float64 for float64 input under x64; none is NaN.
 
-Pipeline (seed steps 1–9; every step a fixed-shape array operation: no Python loop over
+Pipeline (the paper's steps 1–9; every step a fixed-shape array operation: no Python loop over
 samples or pixels, three compiled calls — see ``_run`` for why three):
 
 1. **Reduce** the map to at most ``width`` columns: box average by the smallest integer
@@ -18,7 +17,7 @@ samples or pixels, three compiled calls — see ``_run`` for why three):
    too, for the peak), bilinear when the size is not a multiple.
 2. **Luminance** (:func:`hdrjax.luminance`), optionally a separable Gaussian **blur** of
    ``blur`` pixels (wrapping across the seam; off by default, see below).
-3–4. **Hammersley** samples: ``n_samples`` points uniform on the sphere (the seed's
+3–4. **Hammersley** samples: ``n_samples`` points uniform on the sphere (the paper's
    ``sphereSample``; Halton points on a plain image), mapped to pixels.
 5. **Neighbourhood maximum**: each sample searches a window (radius 0.75 × the sample
    spacing, so the windows cover the sphere; on the sphere its columns span the same
@@ -26,7 +25,7 @@ samples or pixels, three compiled calls — see ``_run`` for why three):
    max-pooled image. A sample is a candidate when the window's maximum exceeds the
    threshold ``T``; the candidate moves to that local maximum.
 6. **Sort** candidates by luminance (``lax.top_k``, at most ``max_candidates``).
-7. **Euclidean filter**: the seed's greedy pass (a candidate joins the first brighter kept
+7. **Euclidean filter**: the paper's greedy pass (a candidate joins the first brighter kept
    one within the window radius) as a fixed-point iteration on the candidate distance
    matrix; distances are angles on the sphere, so the seam is no border.
 8. **Bresenham merge**: between every pair of kept candidates a fixed number of pixels
@@ -35,14 +34,14 @@ samples or pixels, three compiled calls — see ``_run`` for why three):
    "the running mean of ``min(lum, 1.25)`` drops below 1"; here the same with luminance in
    units of ``T``. The greedy merge (a candidate joins the first brighter light whose seed
    passes the test) is again a fixed-point iteration, and only merges within
-   ``max_radius`` degrees (the seed's suggested distance limit).
-9. **Light position and area** (the seed's suggested extension): each light grows from
+   ``max_radius`` degrees (the paper's suggested distance limit).
+9. **Light position and area** (the paper's suggested extension): each light grows from
    its merged local maxima over the 8-connected pixels above ``T``, in a window of
    ``±max_radius`` rows and twice that many columns (so ``max_radius`` in angle up to 60°
    elevation) around the mean of its samples' local maxima, across the seam and poles;
    where two lights reach the same pixel the geodesically nearer (then brighter) keeps it.
    The pixels give the label image, energy, solid angle, colour, the direction (the
-   energy-weighted mean of the pixels' unit vectors: the seed's luminance-weighted
+   energy-weighted mean of the pixels' unit vectors: the paper's luminance-weighted
    position, on the sphere) and the pixel position (the same mean in image coordinates).
 
 Deviations from the listing, and why: its fixed threshold 0.8 is for LDR maps; here it is
@@ -116,7 +115,7 @@ DEFAULT_WIDTH = 512
 DEFAULT_SAMPLES_PER_PIXEL = 0.006
 """The listing's ``samplesMultiplier``: samples per working-resolution pixel."""
 DEFAULT_BLUR = 0.0
-"""Gaussian blur sigma in working-resolution pixels (the seed suggests 1–2 px at 1024)."""
+"""Gaussian blur sigma in working-resolution pixels (the paper suggests 1–2 px at 1024)."""
 DEFAULT_MAX_RADIUS = 10.0
 """Largest light radius in degrees: merge distance limit and mask window."""
 DEFAULT_MAX_LIGHTS = 32
@@ -487,7 +486,7 @@ def _leaders(adj: Array, valid: Array) -> Array:
     """Greedy leader clustering in index order, as a fixed point.
 
     ``adj[i, j]`` (only used for ``i < j``) says ``j`` may join ``i``. Item ``j`` leads
-    when it is valid and no earlier leader may take it: the seed's sequential loops. The
+    when it is valid and no earlier leader may take it: the paper's sequential loops. The
     iteration ``lead ← valid ∧ ¬(adjᵀ lead)`` fixes one more prefix item per step and stops
     at the unique fixed point (usually after a few steps).
     """

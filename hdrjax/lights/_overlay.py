@@ -1,4 +1,4 @@
-"""The seed's figures: detected lights drawn over the tone-mapped map (matplotlib, NumPy side).
+"""Loghin 2019's figures: detected lights drawn over the tone-mapped map (matplotlib, NumPy side).
 
 Blue dots are the lights' local maxima (cluster seeds), cyan crosses their final positions
 (energy centroids), red dots the samples that joined a light, each joined to its light by a

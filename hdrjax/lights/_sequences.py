@@ -1,6 +1,6 @@
 """Low-discrepancy point sets: van der Corput, Hammersley, Halton.
 
-Formulas (``../shared/reference/formulas.md`` §6.1; seed 001's listing):
+Formulas (``../shared/reference/formulas.md`` §6.1; Loghin 2019's listing):
 
 - van der Corput radical inverse in base 2 of a 32-bit index: reverse the bits (16-bit
   rotate, then swap bytes, nibbles, pairs, single bits) and multiply by ``2^-32``;
@@ -98,11 +98,11 @@ def halton(n: int, dims: int = 2) -> Float[Array, "n dims"]:
 
 
 def sphere_directions_np(n: int) -> np.ndarray:
-    """Hammersley points mapped uniformly onto the unit sphere (seed 001's ``sphereSample``).
+    """Hammersley points mapped uniformly onto the unit sphere (Loghin 2019's ``sphereSample``).
 
     ``cos θ = 2 (i + ½) / n − 1`` (the half-index offset keeps the first and last points
     off the poles), ``φ = 2π Φ₂(i)``; returns float64 ``(sinθ cosφ, sinθ sinφ, cosθ)``,
-    ``(n, 3)`` (the seed's frame, z up).
+    ``(n, 3)`` (Loghin's frame, z up).
     """
     i = np.arange(n, dtype=np.int64)
     z = 2.0 * (i + 0.5) / max(n, 1) - 1.0

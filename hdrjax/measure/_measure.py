@@ -1,11 +1,11 @@
 """Measurement on layered images: distances between pixels, readouts, region statistics.
 
-NumPy side, never jitted (seed 000, section 3.2).
+NumPy side, never jitted (Birukov et al. 2022, section 3.2).
 
 Pixel coordinates are ``(x, y)`` = (column, row) of the image array, the top-left pixel
 being ``(0, 0)``; a point is the pixel that contains it (``floor``). Coordinates given
 at a user scale (``scale_percent``, the displayed size in percent of the original pixel
-grid, as in the seed's distance dialog) are divided by ``scale_percent / 100`` first.
+grid, as in that paper's distance dialog) are divided by ``scale_percent / 100`` first.
 
 - **3D distance**: when the image has a ``position`` layer, the distance between the scene
   points behind the two pixels, ``|P(b) − P(a)|``, in scene units (the EXR attribute

@@ -1,7 +1,8 @@
 """Perceptual colour-contrast reproduction after Budak & Petrovichev (2005), an operator.
 
-V. P. Budak and D. A. Petrovichev, "Perceptual colour reproduction of images in lighting
-simulation", Světlo 3/2005. The algorithm (the paper's Fig. 1): convert the rendered scene
+V. P. Budak and A. V. Petrovičev, "Realistické modelování zobrazení osvětlení 3D scén na
+stínítku počítače" (realistic modelling of the display of lit 3D scenes on a computer
+screen), Světlo 3/2005. The algorithm (the paper's Fig. 1): convert the rendered scene
 to a *uniform colour-contrast system* whose brightness follows the Weber–Fechner law
 relative to the adaptation luminance; re-adapt from the scene's adaptation luminance to the
 display's, which the paper sets to half the display's maximum; convert back. Display gamma
@@ -116,8 +117,8 @@ def fechner_brightness(
     """Brightness in JNDs from the adaptation level: ``B = (L_a/ΔL(L_a)) ln(L/L_a)``.
 
     ``ΔL`` is pcond's combined TVI (:func:`hdrjax.vision.tvi`); ``L`` and ``L_a`` in cd/m²,
-    clamped below at 1e-7 cd/m². Stands in for Shklover's formula (Budak & Petrovichev 2005, Eq. 3;
-    not found). Inverse: :func:`fechner_luminance`.
+    clamped below at 1e-7 cd/m². Stands in for Shklover's formula (Budak & Petrovichev 2005,
+    Eq. 3; not found). Inverse: :func:`fechner_luminance`.
     """
     _check.real(L, "L")
     L = jnp.maximum(_check.as_float(L), LMIN)
@@ -211,8 +212,8 @@ class ConeOpponentSpace(AbstractContrastSpace):
 
 
 BUDAK2005 = (
-    "Budak, Petrovichev 2005, Perceptual colour reproduction of images in lighting"
-    " simulation, Světlo 3/2005"
+    "Budak, Petrovičev 2005, Realistické modelování zobrazení osvětlení 3D scén na stínítku"
+    " počítače (realistic modelling of the display of lit 3D scenes), Světlo 3/2005"
 )
 
 

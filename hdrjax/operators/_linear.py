@@ -1,6 +1,6 @@
 """Linear operator: one parameter, the luminance mapped to white, set directly or by exposure.
 
-Seed 000 ("controlled by a single parameter, the maximum luminance, given directly or
+Birukov et al. 2022 ("controlled by a single parameter, the maximum luminance, given directly or
 through exposure time, f-number and camera sensitivity"). The photographic relation is ISO
 12232's saturation-based speed (formulas.md §5; colour-hdri ``exposure/dsc.py``):
 ``H = q L t / N²`` (focus at infinity, no flare) saturates at ``H_sat = 78 / S``, so the

@@ -6,7 +6,7 @@ References:
     Reinhard. "Parameter estimation for photographic tone reproduction." Journal of Graphics
     Tools 7(1), 2002. https://doi.org/10.1080/10867651.2002.10487554
 
-Global operator (paper Eqs. 1–4; seed 003):
+Global operator (paper Eqs. 1–4):
     ``L̄_w = exp(mean(ln(δ + L_w)))``, ``L = a L_w / L̄_w``,
     ``L_d = L (1 + L / L_white²) / (1 + L)``, colour scaled by ``L_d / L_w``.
 
@@ -156,6 +156,21 @@ def jgt_white(st: LuminanceStats, scale: Array) -> Array:
     return jgt_white_terms(st, scale)[0]
 
 
+def jgt_settings(op: Any) -> StatisticsSettings | None:
+    """The statistics the Reinhard operators bind from (their ``percentile_method``,
+    ``bins`` and ``delta``); ``None`` once every parameter is set."""
+    return StatisticsSettings(op.percentile_method, op.bins, op.delta) if op.unset() else None
+
+
+def jgt_key_and_log_average(op: Any, stats: Statistics | None):
+    """``(luminance statistics, key, log-average)`` of a Reinhard operator: the given
+    values, else JGT Eq. 4's key and the measured log-average."""
+    st = bound_stats(op, stats)
+    key = jgt_key(st) if op.key is None else op.key
+    lbar = st.log_average if op.log_average is None else op.log_average
+    return st, key, lbar
+
+
 def reinhard_curve(L: Array, L_white: Array) -> Array:
     """``L (1 + L / L_white²) / (1 + L)`` written to stay finite for L up to the float max."""
     return (L / (1.0 + L)) * (1.0 + (L / L_white) / L_white)
@@ -175,7 +190,7 @@ class Reinhard2002(AbstractLuminanceCurve):
         L_white: smallest scaled luminance mapped to white; ``None`` → JGT Eq. 5.
             ``jnp.inf`` gives the simple operator ``L / (1 + L)``.
         log_average: ``L̄_w`` in image units; ``None`` → measured with ``delta``.
-        delta: offset inside the log-average (1e-6, HDR Toolbox; the seed uses 1e-5).
+        delta: offset inside the log-average (1e-6, HDR Toolbox; GPU shader versions use 1e-5).
         percentile_method: ``"histogram"`` (fast, bounded error) or ``"exact"`` (sort).
         bins: histogram resolution for the percentiles (:func:`hdrjax.stats.percentile`:
             ``2^(ceil(log2 bins) − 3)`` bins per octave, 1024 by default).
@@ -195,16 +210,12 @@ class Reinhard2002(AbstractLuminanceCurve):
     weights: tuple[float, float, float] = weights_field()
 
     def statistics_settings(self) -> StatisticsSettings | None:
-        if not self.unset():
-            return None
-        return StatisticsSettings(self.percentile_method, self.bins, self.delta)
+        return jgt_settings(self)
 
     def bind(self, stats: Statistics | None) -> "Reinhard2002":
         if not self.unset():
             return self
-        st = bound_stats(self, stats)
-        lbar = st.log_average if self.log_average is None else self.log_average
-        key = jgt_key(st) if self.key is None else self.key
+        st, key, lbar = jgt_key_and_log_average(self, stats)
         white = self.L_white
         if white is None:
             white = jgt_white(st, key / lbar)

@@ -40,7 +40,8 @@ from ._reinhard2002 import (
     Reinhard2002,
     bins_setting,
     delta_setting,
-    jgt_key,
+    jgt_key_and_log_average,
+    jgt_settings,
     key_parameter,
     log_average_parameter,
     percentile_method_setting,
@@ -186,16 +187,12 @@ class Reinhard2002Local(AbstractOperator):
         return r, r
 
     def statistics_settings(self) -> StatisticsSettings | None:
-        if not self.unset():
-            return None
-        return StatisticsSettings(self.percentile_method, self.bins, self.delta)
+        return jgt_settings(self)
 
     def bind(self, stats: Statistics | None) -> "Reinhard2002Local":
         if not self.unset():
             return self
-        st = bound_stats(self, stats)
-        key = jgt_key(st) if self.key is None else self.key
-        lbar = st.log_average if self.log_average is None else self.log_average
+        _, key, lbar = jgt_key_and_log_average(self, stats)
         return fill(self, key=key, log_average=lbar)
 
     def _apply(self, p: Prepared) -> Array:

@@ -1,6 +1,6 @@
 """Tabulated operator: a user-edited table of (world luminance → display value) pairs.
 
-Seed 000's third operator ("a table of values edited by the user"). The table is
+Birukov et al. 2022's third operator ("a table of values edited by the user"). The table is
 interpolated in ``log10`` of world luminance with a monotone piecewise-cubic Hermite curve
 (PCHIP, Fritsch & Carlson 1980, https://doi.org/10.1137/0717021 — the same slopes as
 ``scipy.interpolate.PchipInterpolator``) or piecewise-linearly (``interpolation="linear"``);

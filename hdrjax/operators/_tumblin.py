@@ -5,7 +5,7 @@ References:
     18(1), 1999. https://doi.org/10.1145/300776.300783
     Birukov, Barladian, Denisov, Voloboy. "Implementation of high dynamic range image
     processing module as a part of lighting simulation software system." GraphiCon 2022
-    (seed 000, formulas 1 and 2).
+    (formulas 1 and 2).
     Reinhard et al. 2002, https://doi.org/10.1145/566654.566575 (formula 2).
 
 Formula 1 (formulas.md §2.1), absolute luminance in cd/m²:
@@ -198,7 +198,7 @@ class TumblinReinhard(_AbstractTumblin):
         L_wa: world adaptation luminance, cd/m²; ``None`` → measured (``adaptation``).
         L_max: largest world luminance not clipped, cd/m²; ``None`` → the image maximum.
         L_white: formula 2's white in display units; ``None`` → ``T(L_max) / L_dmax``.
-        L_da: display adaptation luminance, cd/m² (20; the seed quotes 10–30).
+        L_da: display adaptation luminance, cd/m² (20; Birukov et al. 2022 quote 10–30).
         C_max: display contrast (100). L_dmax: display maximum luminance, cd/m² (100).
         adaptation: ``"log_average"`` (default) or ``"trimmed"`` (P1–P99 log-average).
         gamma_log: ``"ln"`` (default; see module docstring) or ``"log10"``.

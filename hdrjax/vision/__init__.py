@@ -13,8 +13,9 @@ cd/m² after ``contrast``; :class:`Budak2005` returns display values in [0, 1]).
   scene that calls for no effect, the analysis and a global operator run as one program:
   about the cost of the tone mapping alone); :class:`HumanVision` is the same step as an
   equinox Module for ``jax.jit``/``vmap``/``grad`` and pipelines.
-- :class:`Budak2005` is seed 002's perceptual colour-contrast reproduction (with documented
-  stand-ins for the formulas that are not published; see its module docstring).
+- :class:`Budak2005` is Budak & Petrovichev 2005's perceptual colour-contrast reproduction
+  as a display step (the registered operator ``budak2005`` with gamma; documented stand-ins
+  for the formulas that are not published: :mod:`hdrjax.operators._budak2005`).
 - The formulas are public for reuse and testing: :func:`tvi`, :func:`tvi_photopic`,
   :func:`tvi_scotopic`, :func:`acuity`, :func:`mesopic_weight`, :func:`scotopic_luminance`,
   :func:`blue_shift_weight`, :func:`spencer1995_psf`, :func:`glare_kernel`,
