@@ -76,3 +76,25 @@ def test_statistics_and_reinhard_threaded_scheduler(image):
     ok = ~np.isnan(want)
     assert np.array_equal(np.isnan(got), ~ok)
     np.testing.assert_allclose(got[ok], want[ok], rtol=RTOL32, atol=1e-7)
+
+
+def _compiled_block_statistics() -> int:
+    from hdrjax.tile._stats import block_statistics
+
+    return block_statistics._cache_size()
+
+
+def test_uneven_chunks_on_the_cluster_compile_once_per_worker(cluster, image):
+    # chunks of 100×80 leave edge chunks of 56 rows and 32 columns: padded with NaN to one
+    # shape in the worker, as the in-process tiles are, so the merged statistics are the
+    # same bit for bit, and each worker compiles the chunk statistics once (the function
+    # travels by reference: sent by value, it arrived with an empty cache every chunk)
+    x, _ = image
+    d = da.from_array(x, chunks=(100, 80, 3))
+    st = T.dask_statistics(d)
+    ref = T.statistics(x, tile=(100, 80))
+    for name, v in vars(ref).items():
+        assert np.asarray(getattr(st, name)) == np.asarray(v), name
+    compiled = cluster.run(_compiled_block_statistics)
+    # (a worker that got no chunk compiled nothing)
+    assert all(n <= 1 for n in compiled.values()) and sum(compiled.values()) >= 1, compiled
