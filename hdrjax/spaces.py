@@ -167,7 +167,9 @@ def space(value: SpaceLike = None) -> Space:
     return _from_numbers(tuple(float(v) for v in c))
 
 
-def _check_cat(cat: str) -> str:
+def check_cat(cat: str) -> str:
+    """colour-science's name of a chromatic adaptation transform (case and separators do
+    not matter). Raises ValueError naming the known ones."""
     if _key(cat) == "cat02":
         return DEFAULT_CAT
     import colour
@@ -219,7 +221,7 @@ def conversion_matrix(
     Raises:
         ValueError: unknown space or transform, or degenerate chromaticities.
     """
-    return _matrix(space(source), space(target), _check_cat(cat)).copy()
+    return _matrix(space(source), space(target), check_cat(cat)).copy()
 
 
 def is_identity(matrix: np.ndarray) -> bool:
@@ -280,6 +282,7 @@ __all__ = [
     "Space",
     "XYZ_CHROMATICITIES",
     "XYZ_SPACE",
+    "check_cat",
     "conversion_matrix",
     "convert",
     "convert_to",

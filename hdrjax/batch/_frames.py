@@ -24,8 +24,12 @@ class FrameError(ValueError):
     """A frame that cannot be processed (unreadable file, NaN pixels, failed write)."""
 
 
-def read_frame(path: str | os.PathLike, *, allow_nan: bool = False) -> tuple[np.ndarray, tuple]:
-    """Linear RGB ``(H, W, 3)`` float32 and the luminance weights of a frame file.
+def read_frame(
+    path: str | os.PathLike, *, allow_nan: bool = False
+) -> tuple[np.ndarray, tuple[float, ...] | None]:
+    """Linear RGB ``(H, W, 3)`` float32 in the file's own primaries, and those primaries
+    (OpenEXR's chromaticities 8-tuple, ``None`` for Rec.709/D65): the pipeline converts
+    the frame into its working space on the device (:meth:`Pipeline.for_source`).
 
     The file is read once (an EXR's parts all come from the one open file); sidecar files
     are not looked up. Raises :class:`FrameError` naming the file.
@@ -33,8 +37,8 @@ def read_frame(path: str | os.PathLike, *, allow_nan: bool = False) -> tuple[np.
     name = os.fspath(path)
     try:
         img = hio.read(path, sidecars=False)
-        rgb = np.ascontiguousarray(img.rgb(), np.float32)
-        weights = tuple(float(w) for w in img.luminance_weights)
+        rgb = np.ascontiguousarray(img.native_rgb(), np.float32)
+        source = None if img.space.is_rec709 else img.space.chromaticities
     except (ValueError, OSError, KeyError, IndexError, EOFError) as e:
         msg = str(e) or type(e).__name__
         raise FrameError(msg if os.path.basename(name) in msg else f"{name}: {msg}") from None
@@ -45,7 +49,7 @@ def read_frame(path: str | os.PathLike, *, allow_nan: bool = False) -> tuple[np.
                 f"{name}: {n_nan} of {rgb.shape[0] * rgb.shape[1]} pixel(s) are NaN "
                 "(pass allow_nan=True / --allow-nan to render them black)"
             )
-    return rgb, weights
+    return rgb, source
 
 
 def write_frame(pipeline: Pipeline, data: np.ndarray, out: str | os.PathLike) -> None:
@@ -65,10 +69,10 @@ def _padded(frames: Sequence[np.ndarray], batch_size: int) -> np.ndarray:
     return np.stack(frames)
 
 
-def group_key(rgb: np.ndarray, weights: tuple) -> tuple:
-    """Frames that can share one compiled batch: same shape, luminance weights and
-    cleanliness (all pixels finite, :func:`~hdrjax.batch.frame_is_clean`)."""
-    return (rgb.shape, weights, frame_is_clean(rgb))
+def group_key(rgb: np.ndarray, source: tuple | None) -> tuple:
+    """Frames that can share one compiled batch: same shape, primaries (:func:`read_frame`)
+    and cleanliness (all pixels finite, :func:`~hdrjax.batch.frame_is_clean`)."""
+    return (rgb.shape, source, frame_is_clean(rgb))
 
 
 def dispatch_render(
@@ -88,8 +92,8 @@ def dispatch_render(
     n = len(frames)
     if not 1 <= n <= batch_size:
         raise ValueError(f"frames: expected 1..{batch_size} frames, got {n}")
-    _, weights, clean = key
-    p = pipeline.with_weights(weights)
+    _, source, clean = key
+    p = pipeline.for_source(source)
     ops = None
     if values is not None:
         vals = list(values) + [values[-1]] * (batch_size - n)
@@ -102,8 +106,8 @@ def measure_frames(
 ) -> list[dict]:
     """Per-frame measurement records (``hdrjax.batch._sequence.measure_batch``) of frames
     sharing the :func:`group_key` ``key``."""
-    _, weights, clean = key
-    p = pipeline.with_weights(weights)
+    _, source, clean = key
+    p = pipeline.for_source(source)
     return measure_batch(p, _padded(frames, batch_size), pooled, clean)[: len(frames)]
 
 

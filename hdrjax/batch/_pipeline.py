@@ -1,16 +1,18 @@
 """``Pipeline``: what happens to every frame of a batch, described once.
 
 Numeric contract: a frame is linear RGB ``(H, W, 3)`` as read from its file (relative or
-cd/m²). The pipeline multiplies it by ``scale``, runs the optional ``steps`` in order
-(median/mean filter, highlight desaturation, human-vision simulation; all on scene-referred
-linear RGB), tone-maps it with ``operator`` and, for display formats, clips to [0, 1],
-applies the transfer function and rounds to ``bits``-bit code values on the device
-(``round(clip(v, 0, 1) · (2^bits − 1))``, ties to even). HDR formats (``exr``, ``hdr``,
-``pfm``) receive the operator's display-referred *linear* float32 output.
+cd/m²), in the file's primaries. The pipeline converts it into the working space
+(``space``, sRGB by default; :mod:`hdrjax.spaces`), multiplies it by ``scale``, runs the
+optional ``steps`` in order (median/mean filter, highlight desaturation, human-vision
+simulation; all on scene-referred linear RGB), tone-maps it with ``operator`` and, for
+display formats, clips to [0, 1], applies the transfer function and rounds to ``bits``-bit
+code values on the device (``round(clip(v, 0, 1) · (2^bits − 1))``, ties to even). HDR
+formats (``exr``, ``hdr``, ``pfm``) receive the operator's display-referred *linear* float32 output.
 
-The pipeline is an equinox Module: the operator's parameters are its array leaves (traced
-by ``jit``), everything else is static. Steps are :class:`Step` records (a kind and keyword
-options), so a pipeline pickles and travels to Dask workers.
+The pipeline is an equinox Module: the operator's parameters and the colour conversion
+``matrix`` are its array leaves (traced by ``jit``), everything else is static. Steps are
+:class:`Step` records (a kind and keyword options), so a pipeline pickles and travels to
+Dask workers.
 """
 
 import dataclasses
@@ -141,6 +143,11 @@ class Pipeline(eqx.Module):
         transfer: ``"srgb"``, ``"gamma"`` or ``"linear"`` encoding for display formats.
         gamma: exponent for ``transfer="gamma"``.
         scale: factor applied to each frame first (e.g. to cd/m²).
+        space: the working space frames are converted into (a :mod:`hdrjax.spaces` name;
+            ``"sRGB"``: BT.709 primaries, D65).
+        cat: chromatic adaptation between different whites (``"CAT02"``).
+        matrix: the conversion of the current frames' primaries into ``space`` (set by
+            :meth:`for_source`; ``None``: the identity).
         vectorize: how a compiled batch goes over its frames: ``"vmap"`` (all frames at
             once, vectorised across frames), ``"map"`` (``lax.map``: one frame after the
             other inside the one compiled call; each frame's intermediates stay in cache) or
@@ -165,8 +172,15 @@ class Pipeline(eqx.Module):
     gamma: float = eqx.field(static=True, default=2.2)
     scale: float = eqx.field(static=True, default=1.0)
     vectorize: Literal["auto", "map", "vmap"] = eqx.field(static=True, default="auto")
+    space: str = eqx.field(static=True, default="sRGB")
+    cat: str = eqx.field(static=True, default="CAT02")
+    matrix: Float[Array, "3 3"] | None = None
 
     def __check_init__(self) -> None:
+        from .. import spaces
+
+        spaces.space(self.space)  # raise ValueError for unknown names, here
+        spaces.check_cat(self.cat)
         if self.format not in DISPLAY_FORMATS + HDR_FORMATS:
             raise ValueError(
                 f"format: expected one of {', '.join(DISPLAY_FORMATS + HDR_FORMATS)}, "
@@ -197,23 +211,29 @@ class Pipeline(eqx.Module):
         """Whether outputs are display-encoded code values (png/tif/jpg)."""
         return self.format in DISPLAY_FORMATS
 
-    def with_weights(self, weights: tuple[float, float, float]) -> "Pipeline":
-        """The pipeline with the operator's luminance weights set to a file's primaries."""
-        op = self.operator
-        names = {f.name for f in dataclasses.fields(op)}
-        if "weights" not in names and "chromaticities" in names and weights != op.weights_:
-            raise ValueError(
-                f"{op.name} needs the frames' primaries, not only their luminance weights"
-                f" {weights}: set its chromaticities to the files' (or convert the frames"
-                " to Rec.709 first)"
-            )
-        if "weights" not in names or weights == op.weights_:
-            return self
-        return dataclasses.replace(self, operator=dataclasses.replace(op, weights=weights))
+    def for_source(self, source: tuple[float, ...] | None) -> "Pipeline":
+        """The pipeline for frames in these primaries (OpenEXR's chromaticities, ``None``
+        for Rec.709/D65): their conversion into the working space, and the operator's
+        luminance weights (the files' own luminance, see
+        :func:`hdrjax.spaces.luminance_weights_in`) and primaries."""
+        from .. import spaces
+
+        target = spaces.space(self.space)
+        m = spaces.conversion_matrix(source, target, cat=self.cat)
+        weights = spaces.luminance_weights_in(source, target, cat=self.cat)
+        op = self.operator.for_primaries(
+            weights, None if target.is_rec709 else target.chromaticities
+        )
+        matrix = None if spaces.is_identity(m) else jnp.asarray(m, jnp.float32)
+        return dataclasses.replace(self, operator=op, matrix=matrix)
 
     def prepare(self, rgb: Float[Array, "H W 3"]) -> Float[Array, "H W 3"]:
         """Scale and run the steps: the image the operator measures and maps."""
         x = as_float_image(rgb)
+        if self.matrix is not None:
+            from ..spaces import convert
+
+            x = convert(x, self.matrix)
         if self.scale != 1.0:
             x = x * jnp.asarray(self.scale, x.dtype)
         for s in self.steps:

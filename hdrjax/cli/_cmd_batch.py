@@ -11,6 +11,7 @@ import sys
 from ..io._display import DEFAULT_COMPRESSION
 from ._cmd_tonemap import (
     SHORTCUT_OPTIONS,
+    add_colour_arguments,
     add_parameter_shortcuts,
     add_set_argument,
     build_operator,
@@ -108,6 +109,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--scale", type=positive_float, default=1.0, help="multiply every frame by this first"
     )
+    add_colour_arguments(p)
     p.add_argument("--median", type=_odd_size, metavar="K", help="median filter K×K first")
     p.add_argument("--mean", type=_odd_size, metavar="K", help="mean filter K×K first")
     p.add_argument(
@@ -163,6 +165,8 @@ def build_pipeline(args: argparse.Namespace):
             transfer=args.transfer,
             gamma=args.gamma,
             scale=args.scale,
+            space=args.working_space,
+            cat=args.cat,
         )
     except ValueError as e:
         raise UsageError(str(e)) from None

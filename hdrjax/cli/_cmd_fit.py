@@ -5,12 +5,14 @@ import os
 import re
 
 from ._cmd_tonemap import (
+    add_colour_arguments,
     add_encoding_arguments,
     add_input_output_method_arguments,
     add_set_argument,
     add_table_and_scale_arguments,
     build_operator,
     check_output,
+    colour_settings,
     describe,
     encode_output,
     eqx_jit_measure,
@@ -104,6 +106,7 @@ def register(subparsers) -> None:
         f"{EXIT_NOT_CONVERGED})",
     )
     add_table_and_scale_arguments(p)
+    add_colour_arguments(p)
     add_encoding_arguments(p)
     p.set_defaults(func=run)
 
@@ -254,8 +257,8 @@ def run(args: argparse.Namespace) -> int:
             if names
             else f"--param: {op.name} has no parameters to fit"
         )
-    img, rgb = load_rgb(args.input, args.scale)
-    op = with_file_weights(op, img)
+    img, rgb = load_rgb(args.input, args.scale, args)
+    op = with_file_weights(op, img, args)
     max_size = args.max_size or None
 
     import jax.numpy as jnp
@@ -264,7 +267,9 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import fit as hfit
 
-    target, labels = build_target(parsed, args, rgb.shape[:2], img.luminance_weights, max_size)
+    space, cat = colour_settings(args)
+    weights = img.luminance_weights_in(space, cat=cat)
+    target, labels = build_target(parsed, args, rgb.shape[:2], weights, max_size)
     x = jnp.asarray(rgb)
     start = eqx_jit_measure(op, x)  # the automatic estimates: the fit's starting point
     try:

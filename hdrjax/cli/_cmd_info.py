@@ -2,7 +2,14 @@
 
 import argparse
 
-from ._cmd_tonemap import describe, load_rgb, with_file_weights
+from ._cmd_tonemap import (
+    add_colour_arguments,
+    colour_settings,
+    describe,
+    describe_conversion,
+    load_rgb,
+    with_file_weights,
+)
 from ._common import positive_float
 
 
@@ -24,6 +31,7 @@ def register(subparsers) -> None:
         action="store_true",
         help="exact (sorted) percentiles instead of the histogram estimate",
     )
+    add_colour_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -37,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from .._stats import percentile, summarise
     from ..operators import get_operator, operator_names, parameter_info
 
-    img, rgb = load_rgb(args.input, args.scale)
+    img, rgb = load_rgb(args.input, args.scale, args)
     h, w = rgb.shape[:2]
     chans = img.image.shape[-1] if img.image.ndim == 3 else 1
     print(f"file: {args.input}")
@@ -48,8 +56,10 @@ def run(args: argparse.Namespace) -> int:
     unit = getattr(img, "unit", None)
     if unit:
         print(f"unit: {unit}")
-    wts = img.luminance_weights
-    print("luminance weights: (" + ", ".join(f"{v:.5f}" for v in wts) + ")")
+    print(describe_conversion(img, args))
+    space, cat = colour_settings(args)
+    wts = img.luminance_weights_in(space, cat=cat)
+    print("luminance weights: (" + ", ".join(f"{v:.5f}" for v in wts) + f") in {space.name}")
     L = luminance(jnp.asarray(rgb), wts)
     method = "exact" if args.exact else "histogram"
     qs = jnp.array([1.0, 5.0, 50.0, 95.0, 99.0])
@@ -88,7 +98,9 @@ def run(args: argparse.Namespace) -> int:
     # statistics measured once per statistics setting (most operators share one)
     classes = [get_operator(name) for name in operator_names()]
     ops = [
-        with_file_weights(c(), img) for c in classes if any(i.estimated for i in parameter_info(c))
+        with_file_weights(c(), img, args)
+        for c in classes
+        if any(i.estimated for i in parameter_info(c))
     ]
     all_measured = eqx.filter_jit(_measure_all)(ops, jnp.asarray(rgb))
     for op, measured in zip(ops, all_measured, strict=True):

@@ -1,6 +1,7 @@
 """``hdrjax tonemap INPUT -o OUTPUT``: tone-map an HDR file to a display image."""
 
 import argparse
+import functools
 import os
 import time
 
@@ -37,9 +38,44 @@ def register(subparsers) -> None:
     add_set_argument(p)
     add_parameter_shortcuts(p, SHORTCUT_OPTIONS)
     add_table_and_scale_arguments(p)
+    add_colour_arguments(p)
     add_encoding_arguments(p)
     p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
     p.set_defaults(func=run)
+
+
+def add_colour_arguments(p: argparse.ArgumentParser) -> None:
+    """``--working-space`` and ``--cat``: the space every file is converted into on
+    reading (see :func:`load_rgb`)."""
+    p.add_argument(
+        "--working-space",
+        default="sRGB",
+        metavar="NAME",
+        help="linear RGB space the file is converted into before tone mapping: a "
+        "colour-science colourspace name ('sRGB' (default), 'ACEScg', 'ITU-R BT.2020', "
+        "'Display P3'...) or 'CIE XYZ'",
+    )
+    p.add_argument(
+        "--cat",
+        default="CAT02",
+        metavar="NAME",
+        help="chromatic adaptation between different white points (default CAT02; "
+        "'Bradford', 'CAT16', 'Von Kries', 'XYZ Scaling'...)",
+    )
+
+
+def colour_settings(args: argparse.Namespace):
+    """``(Space, cat)`` from ``--working-space``/``--cat`` (defaults when the command has
+    no such options); unknown names → UsageError."""
+    from .. import spaces
+
+    try:
+        space = spaces.space(getattr(args, "working_space", spaces.DEFAULT_SPACE))
+        cat = spaces.check_cat(getattr(args, "cat", spaces.DEFAULT_CAT))
+    except ValueError as e:
+        flag = "--cat" if "cat:" in str(e) else "--working-space"
+        raise UsageError(f"{flag}: {e}") from None
+    return space, cat
 
 
 def add_set_argument(p: argparse.ArgumentParser, extra: str = "") -> None:
@@ -293,33 +329,49 @@ def describe(op, estimated: tuple[str, ...] = (), given: dict | None = None) -> 
     return "\n".join(lines)
 
 
-def load_rgb(path: str, scale: float = 1.0):
-    """Read an HDR file as float32 RGB with its luminance weights; errors → DataError."""
+def load_rgb(path: str, scale: float = 1.0, args: argparse.Namespace | None = None):
+    """Read an HDR file as float32 linear RGB in the working space (``args``'s
+    ``--working-space``/``--cat``, sRGB and CAT02 otherwise); errors → DataError."""
     import numpy as np
 
+    img, native, m = load_native(path, scale, args)
+    if m is None:
+        return img, native
+    return img, np.ascontiguousarray(native @ m.T.astype(np.float32), dtype=np.float32)
+
+
+def load_native(path: str, scale: float = 1.0, args: argparse.Namespace | None = None):
+    """``(image, native RGB, matrix)``: the file's own RGB and the matrix (``scale``
+    included) taking it to the working space, ``None`` when that is the identity."""
+    import numpy as np
+
+    from .. import spaces
+
+    space, cat = colour_settings(args)
     img = read_image(path)
     try:
-        rgb = img.rgb()
+        native = img.native_rgb()
+        m = img.conversion(space, cat=cat) * scale
     except ValueError as e:
         raise DataError(str(e) if os.path.basename(path) in str(e) else f"{path}: {e}") from None
-    if scale != 1.0:
-        rgb = rgb * np.float32(scale)
-    return img, rgb
+    if not spaces.is_identity(m):
+        return img, native, m
+    return img, (native * np.float32(scale) if scale != 1.0 else native), None
 
 
 def run(args: argparse.Namespace) -> int:
     check_output(args)
     op = build_operator(args)
     t0 = time.perf_counter()
-    img, rgb = load_rgb(args.input, args.scale)
+    img, rgb, m = load_native(args.input, args.scale, args)
     t_read = time.perf_counter() - t0
 
     import numpy as np
 
-    op = with_file_weights(op, img)
+    op = with_file_weights(op, img, args)
     t1 = time.perf_counter()
-    measured = eqx_jit_measure(op, rgb)
-    out = encode_output(args, measured(rgb))
+    measured = eqx_jit_measure(op, rgb, m)
+    out = encode_output(args, apply_in_space(measured, rgb, m))
     t_map = time.perf_counter() - t1
     n_bad = int(np.count_nonzero(~np.all(np.isfinite(rgb), axis=-1)))
     t2 = time.perf_counter()
@@ -327,6 +379,8 @@ def run(args: argparse.Namespace) -> int:
     t_write = time.perf_counter() - t2
     h, w = rgb.shape[:2]
     print(f"input: {args.input} ({w}x{h})")
+    if m is not None:
+        print(f"  {describe_conversion(img, args)}")
     if n_bad:
         print(f"  {n_bad} pixel(s) with NaN/Inf values excluded from statistics")
     print(describe(measured, op.unset(), op.parameters()))
@@ -338,15 +392,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def with_file_weights(op, img):
-    """The operator with the file's luminance weights (operators that have a setting) and
-    primaries (operators that declare ``chromaticities``: their colour matrix)."""
-    import dataclasses
+def describe_conversion(img, args: argparse.Namespace | None = None) -> str:
+    """One line: the file's primaries and white, and the working space they go to."""
+    space, cat = colour_settings(args)
+    src = img.space
+    if src == space:
+        return f"primaries: {src.name}, working space {space.name} (not converted)"
+    c = ", ".join(f"{v:.4f}" for v in src.chromaticities[:6])
+    white = ", ".join(f"{v:.4f}" for v in src.white)
+    how = "no adaptation (XYZ)" if src.is_xyz or space.is_xyz else cat
+    if not (src.is_xyz or space.is_xyz) and src.white == space.white:
+        how = "same white"
+    return f"primaries ({c}), white ({white}): converted to {space.name} ({how})"
 
-    op = with_weights(op, img.luminance_weights)
-    if "chromaticities" in {f.name for f in dataclasses.fields(op)}:
-        op = dataclasses.replace(op, chromaticities=img.chromaticities)
-    return op
+
+def with_file_weights(op, img, args: argparse.Namespace | None = None):
+    """The operator for the file's pixels in the working space: luminance weights that
+    give the file's own luminance (operators that have a setting) and the working space's
+    primaries (operators whose colour model declares ``chromaticities``)."""
+    space, cat = colour_settings(args)
+    weights = img.luminance_weights_in(space, cat=cat)
+    return op.for_primaries(weights, None if space.is_rec709 else space.chromaticities)
 
 
 def with_weights(op, weights):
@@ -359,8 +425,36 @@ def with_weights(op, weights):
     return op
 
 
-def eqx_jit_measure(op, rgb):
-    """``op.measure(rgb)`` compiled (statistics of large images are slow eagerly)."""
+def eqx_jit_measure(op, rgb, matrix=None):
+    """``op.measure(rgb)`` compiled (statistics of large images are slow eagerly), of
+    ``rgb`` converted by ``matrix`` (:func:`load_native`) in the same program."""
+    return _measure_in_space(op, rgb, matrix)
+
+
+def apply_in_space(op, rgb, matrix=None):
+    """``op(rgb)``, ``rgb`` converted by ``matrix`` in the same compiled program."""
+    return _apply_in_space(op, rgb, matrix)
+
+
+def _in_space(rgb, matrix):
+    from ..spaces import convert
+
+    return rgb if matrix is None else convert(rgb, matrix)
+
+
+def _measure_in_space(op, rgb, matrix):
+    return _jitted()[0](op, rgb, matrix)
+
+
+def _apply_in_space(op, rgb, matrix):
+    return _jitted()[1](op, rgb, matrix)
+
+
+@functools.cache
+def _jitted():
+    """The compiled measure and apply (made once: equinox imports JAX)."""
     import equinox as eqx
 
-    return eqx.filter_jit(lambda o, x: o.measure(x))(op, rgb)
+    measure = eqx.filter_jit(lambda o, x, m: o.measure(_in_space(x, m)))
+    apply = eqx.filter_jit(lambda o, x, m: o(_in_space(x, m)))
+    return measure, apply

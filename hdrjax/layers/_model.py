@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import Float
 
+from .. import spaces as _spaces
 from .._colour import luminance_weights as _luminance_weights
 from ._errors import LayerShapeError, MissingLayerError, ReadError
 
@@ -380,8 +381,15 @@ class LayeredImage:
             return "spectral"
         return "other"
 
-    def rgb(self) -> Float[np.ndarray, "H W 3"]:
-        """Linear RGB in the image's primaries, ``(H, W, 3)`` float32, same unit as the image.
+    @property
+    def space(self) -> "_spaces.Space":
+        """The linear RGB space of the file's pixels (its primaries and white):
+        :attr:`chromaticities`, or sRGB/BT.709 with D65 when the file declares none."""
+        return _spaces.space(self.chromaticities)
+
+    def native_rgb(self) -> Float[np.ndarray, "H W 3"]:
+        """Linear RGB in the file's own primaries (:attr:`space`), ``(H, W, 3)`` float32,
+        same unit as the image: no conversion.
 
         A single-channel image is replicated to grey. A luminance/chroma image is rebuilt
         as OpenEXR does: ``R = (RY + 1) Y``, ``B = (BY + 1) Y`` and
@@ -414,6 +422,46 @@ class LayeredImage:
             "Y, RY, BY channels"
         )
 
+    def conversion(
+        self, space: "_spaces.SpaceLike" = _spaces.DEFAULT_SPACE, *, cat: str = _spaces.DEFAULT_CAT
+    ) -> np.ndarray:
+        """The 3×3 matrix taking :meth:`native_rgb` to ``space``
+        (:func:`hdrjax.spaces.conversion_matrix`)."""
+        return _spaces.conversion_matrix(self.space, space, cat=cat)
+
+    def rgb(
+        self, space: "_spaces.SpaceLike" = _spaces.DEFAULT_SPACE, *, cat: str = _spaces.DEFAULT_CAT
+    ) -> Float[np.ndarray, "H W 3"]:
+        """Linear RGB in a working space, ``(H, W, 3)`` float32, same unit as the image.
+
+        Args:
+            space: the working space: a colour-science RGB colourspace name (``"sRGB"``,
+                the default: BT.709 primaries, D65; ``"ACEScg"``, ``"ITU-R BT.2020"``,
+                ``"Display P3"``…), ``"CIE XYZ"``, or chromaticities. The file's pixels
+                (:meth:`native_rgb`, in :attr:`space`) are converted as colour-science's
+                ``RGB_to_RGB`` does (see :mod:`hdrjax.spaces`).
+            cat: the chromatic adaptation transform between different whites (CAT02).
+
+        Luminance stays the file's: use :meth:`luminance_weights_in` with the converted
+        pixels, or :meth:`luminance`.
+
+        Raises:
+            ValueError: no RGB interpretation (see :meth:`native_rgb`), an unknown space or
+                transform.
+        """
+        m = self.conversion(space, cat=cat)
+        rgb = self.native_rgb()
+        if _spaces.is_identity(m):
+            return rgb
+        return np.ascontiguousarray(rgb @ m.T.astype(np.float32), dtype=np.float32)
+
+    def luminance_weights_in(
+        self, space: "_spaces.SpaceLike" = _spaces.DEFAULT_SPACE, *, cat: str = _spaces.DEFAULT_CAT
+    ) -> tuple[float, float, float]:
+        """Weights that give, from :meth:`rgb` in ``space``, the file's own luminance
+        (:func:`hdrjax.spaces.luminance_weights_in`)."""
+        return _spaces.luminance_weights_in(self.space, space, cat=cat)
+
     def luminance(self) -> Float[np.ndarray, "H W"]:
         """Per-pixel luminance Y in the image's unit, ``(H, W)`` float32.
 
@@ -426,7 +474,7 @@ class LayeredImage:
         kind = self.kind
         if kind in ("y", "ych"):
             return self.image[:, :, 0]
-        rgb = self.rgb()
+        rgb = self.native_rgb()
         wr, wg, wb = (np.float32(w) for w in self.luminance_weights)
         return rgb[:, :, 0] * wr + rgb[:, :, 1] * wg + rgb[:, :, 2] * wb
 

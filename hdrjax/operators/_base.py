@@ -28,7 +28,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._colour import REC709_WEIGHTS, luminance
+from .._colour import REC709_WEIGHTS, luminance, luminance_weights
 from .._scale import ln_max
 from .._stats import (
     DEFAULT_BINS,
@@ -458,6 +458,31 @@ class AbstractOperator(eqx.Module):
             return jax.vmap(self.__call__)(rgb)
         run = lambda p: self._measure(p)._apply(p)  # noqa: E731
         return dispatch(rgb, self.weights_, run, fix=True, stats=self.statistics_settings())
+
+    def for_primaries(
+        self: _Op,
+        weights: tuple[float, float, float] | None = None,
+        chromaticities: tuple[float, ...] | None = None,
+    ) -> _Op:
+        """The operator for images in given primaries (a working space).
+
+        Args:
+            weights: luminance weights of the pixels (e.g. a file's photometric weights in
+                the working space, :meth:`hdrjax.layers.LayeredImage.luminance_weights_in`);
+                ``None``: those of ``chromaticities``. Set on operators that map luminance.
+            chromaticities: the primaries and white (OpenEXR's 8-tuple; ``None``: Rec.709
+                with D65). Set on operators whose colour model declares them (their
+                ``chromaticities`` parameter).
+
+        Per-channel operators come back as they are.
+        """
+        names = {f.name for f in dataclasses.fields(self)}
+        changes: dict[str, Any] = {}
+        if "chromaticities" in names:
+            changes["chromaticities"] = chromaticities
+        if "weights" in names:
+            changes["weights"] = luminance_weights(chromaticities) if weights is None else weights
+        return dataclasses.replace(self, **changes) if changes else self
 
     def unset(self) -> tuple[str, ...]:
         """Names of the parameters that will be measured from the image."""

@@ -98,7 +98,7 @@ def test_pooled_statistics_match_numpy(seq):
 
     pipe = batch.Pipeline("reinhard2002")
     frames = [frame(i) for i in range(6)]
-    key = ((32, 64, 3), pipe.operator.weights_, True)  # shape, weights, all pixels finite
+    key = ((32, 64, 3), None, True)  # shape, primaries (Rec.709), all pixels finite
     # two batches of 4 (the second padded), as run() does
     recs = measure_frames(pipe, frames[:4], key, 4, True)
     recs += measure_frames(pipe, frames[4:], key, 4, True)

@@ -82,7 +82,7 @@ def test_smooth_averages_each_parameter_as_its_pooling_declares():
     frames = _frames()
     op = hdrjax.make_operator("reinhard2004")
     pipe = batch.Pipeline(op)
-    key = ((8, 8, 3), op.weights_, True)
+    key = ((8, 8, 3), None, True)  # shape, primaries (Rec.709), all pixels finite
     recs = measure_frames(pipe, frames, key, 4, pooled=False)
     got = smoothed_values(op, recs, 2.0)
     pooling = {p.name: p.pooling for p in parameter_info(op)}

@@ -9,6 +9,7 @@ import pytest
 from PIL import Image
 
 from hdrjax.cli import main
+from hdrjax.io import read
 
 from ..conftest import DATA
 
@@ -156,10 +157,23 @@ def test_module_and_script_are_the_same_command():
 
 
 def test_luminance_uses_the_files_primaries(tmp_path, capsys):
-    """Carrots.exr carries ACES AP0 chromaticities: its luminance weights are
-    (0.34397, 0.72817, -0.07213) (SOURCES.md), and tonemap uses them."""
+    """Carrots.exr carries ACES AP0 chromaticities (D60 white): its luminance weights are
+    (0.34397, 0.72817, -0.07213) (the Y row of AP0's matrix, SMPTE ST 2065-1). It is
+    converted to the sRGB working space with CAT02, and its luminance stays its own: the
+    log-average ``info`` prints is that of Y = 0.34397 R + 0.72817 G − 0.07213 B of the
+    file's pixels."""
+    import re
+
     carrots = str(DATA / "Carrots.exr")
     assert main(["info", carrots]) == 0
-    assert "luminance weights: (0.34397, 0.72817, -0.07213)" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "white (0.3217, 0.3377): converted to sRGB (CAT02)" in out
+    rgb = read(carrots).image.astype(np.float64)
+    y = rgb @ np.array([0.34397, 0.72817, -0.07213])
+    y = y[np.isfinite(y) & (y > 0)]
+    got = float(re.search(r"log-average ([0-9.e+-]+)", out).group(1))
+    assert got == pytest.approx(np.exp(np.mean(np.log(y))), rel=2e-3)  # histogram bin
+    in_ap0 = read(carrots).luminance_weights_in("ACES2065-1")  # no conversion: its own
+    np.testing.assert_allclose(in_ap0, (0.34397, 0.72817, -0.07213), atol=5e-6)
     assert main(["tonemap", carrots, "-o", str(tmp_path / "c.png")]) == 0
-    assert "weights: (0.3440, 0.7282, -0.0721)" in capsys.readouterr().out
+    assert "converted to sRGB (CAT02)" in capsys.readouterr().out
