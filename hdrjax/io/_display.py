@@ -2,10 +2,23 @@
 
 Input is display-referred: float in [0, 1] (values outside are clipped, NaN becomes 0) or
 integer code values (uint8 / uint16). Nothing here applies a transfer function; encode
-with the display module first. Each file carries an sRGB note: the PNG ``sRGB`` chunk
-(rendering intent perceptual) and, for JPEG and TIFF, an embedded sRGB ICC profile (when
-Pillow has LittleCMS; TIFF otherwise has no profile). PNG and TIFF are written by hdrjax
-itself (zlib + struct), so 16-bit RGB works; JPEG uses Pillow (8 bit only).
+with the display module first. Each file is tagged with the display the pixels were
+encoded for (``display=``, sRGB by default; the primaries and curve come from
+:mod:`hdrjax.display`'s table):
+
+* PNG (PNG Specification, third edition, W3C 2025): ``cICP`` (ITU-T H.273 code points)
+  where H.273 has a code for the display; ``cHRM`` (primaries and white); for sRGB the
+  ``sRGB`` chunk with ``gAMA`` 1/2.2, as the specification asks; for power laws (gamma,
+  BT.1886, linear) ``gAMA``; for the other curves (sRGB curve on other primaries, PQ,
+  HLG) an ``iCCP`` ICC profile (with ``gAMA`` 1/2.2 approximating the sRGB curve, never
+  for PQ or HLG). ``sRGB`` and ``iCCP`` are never both written (the specification forbids
+  it). Readers that know ``cICP`` use it first, then ``iCCP``, ``sRGB``, ``cHRM``/``gAMA``.
+* TIFF (tag 34675) and JPEG (APP2, by Pillow): an ICC v2.4 display profile written by
+  hdrjax (:mod:`hdrjax.io._icc`) with the display's primaries, white and curve.
+
+PQ and HLG files must be 16-bit (PNG or TIFF): 8 bits band visibly over their range, so
+``bits=8`` and JPEG are refused for them. PNG and TIFF are written by hdrjax itself
+(zlib + struct), so 16-bit RGB works; JPEG uses Pillow (8 bit only).
 """
 
 import io as _io
@@ -13,11 +26,16 @@ import os
 import struct
 import zlib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import _check
 from ._atomic import atomic_path
+from ._icc import display_profile, power_law
+
+if TYPE_CHECKING:
+    from ..display._displays import Display
 
 DISPLAY_FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tif": "tiff", ".tiff": "tiff"}
 DEFAULT_COMPRESSION = 1
@@ -31,15 +49,6 @@ default) and 0.56 MB in 115 ms for filtered rows at level 6. Levels 4–9 use zl
 strategy (9: smallest, slowest); 0 stores the rows uncompressed and unfiltered."""
 
 _RLE_LEVELS = range(1, 4)
-
-
-def _srgb_icc() -> bytes | None:
-    try:
-        from PIL import ImageCms
-
-        return ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
-    except Exception:  # Pillow without LittleCMS: no profile, the file is still valid
-        return None
 
 
 def to_code_values(display: np.ndarray, bits: int) -> np.ndarray:
@@ -78,12 +87,66 @@ def _check_compression(compression: int) -> int:
     return int(compression)
 
 
-def encode_png(code: np.ndarray, compression: int = DEFAULT_COMPRESSION) -> bytes:
-    """PNG bytes for ``(H, W, C)`` uint8/uint16 code values, with an ``sRGB`` chunk.
+def _resolve(display: "str | Display") -> "Display":
+    # imported on first write: hdrjax.display brings the operators package (~0.8 s)
+    from ..display._displays import display as find
+
+    return find(display)
+
+
+def _peak() -> float:
+    from ..display._displays import DEFAULT_PEAK
+
+    return DEFAULT_PEAK
+
+
+def _png_colour_chunks(display: "Display", grey: bool) -> list[bytes]:
+    """The PNG chunks that tell readers how to decode code values encoded for ``display``.
+
+    PNG third edition: ``cICP`` holds the H.273 code points (matrix 0, RGB, is the only
+    one PNG allows; the table's are all full range); ``cHRM`` the primaries and white ×100000
+    (white first); ``gAMA`` 1/γ ×100000; ``iCCP`` a Latin-1 profile name, compression
+    method 0 and the zlib-compressed profile; ``sRGB`` the rendering intent. A writer of
+    ``sRGB`` or ``iCCP`` is asked to add ``gAMA`` and ``cHRM`` approximating them, for
+    readers without colour management.
+    """
+    from .. import spaces
+
+    sp = spaces.space(display.space)
+    out = []
+    if display.cicp is not None:
+        out.append(_chunk(b"cICP", bytes(display.cicp)))
+    xr, yr, xg, yg, xb, yb, xw, yw = sp.chromaticities
+    chrm = struct.pack(">8I", *(round(v * 100000) for v in (xw, yw, xr, yr, xg, yg, xb, yb)))
+    out.append(_chunk(b"cHRM", chrm))
+    gamma = power_law(display)
+    if gamma is None and display.transfer == "srgb":
+        gamma = 2.2  # the approximation the specification gives for the sRGB curve
+    if gamma is not None:
+        out.append(_chunk(b"gAMA", struct.pack(">I", round(100000 / gamma))))
+    if display.transfer == "srgb" and sp.is_rec709:
+        out.append(_chunk(b"sRGB", b"\x00"))  # rendering intent: perceptual
+    elif power_law(display) is None:
+        icc = display_profile(display, grey=grey, peak=_peak())
+        name = display.name.encode("latin-1", "replace")[:79]
+        out.append(_chunk(b"iCCP", name + b"\x00\x00" + zlib.compress(icc, 9)))
+    return out
+
+
+def encode_png(
+    code: np.ndarray,
+    compression: int = DEFAULT_COMPRESSION,
+    *,
+    display: "str | Display" = "sRGB",
+) -> bytes:
+    """PNG bytes for ``(H, W, C)`` uint8/uint16 code values, tagged for ``display``.
 
     ``compression`` is the zlib level (0 stored … 9 smallest); see :data:`DEFAULT_COMPRESSION`.
+    ``display`` (a name or a :class:`~hdrjax.display.Display`) chooses the colour chunks
+    (``cICP``, ``cHRM``, ``gAMA``, ``sRGB`` or ``iCCP``: see the module docstring).
     """
     compression = _check_compression(compression)
+    colour = _png_colour_chunks(_resolve(display), grey=code.shape[2] == 1)
     h, w, c = code.shape
     depth = 16 if code.dtype == np.uint16 else 8
     ctype = {1: 0, 3: 2, 4: 6}[c]
@@ -104,8 +167,7 @@ def encode_png(code: np.ndarray, compression: int = DEFAULT_COMPRESSION) -> byte
     out = [
         b"\x89PNG\r\n\x1a\n",
         _chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, ctype, 0, 0, 0)),
-        _chunk(b"sRGB", b"\x00"),
-        _chunk(b"gAMA", struct.pack(">I", 45455)),
+        *colour,
         _chunk(b"tEXt", b"Software\x00hdrjax"),
         _chunk(b"IDAT", idat),
         _chunk(b"IEND", b""),
@@ -199,6 +261,7 @@ def write_display(
     overwrite: bool = True,
     quality: int = 95,
     compression: int = DEFAULT_COMPRESSION,
+    display: "str | Display" = "sRGB",
 ) -> Path:
     """Write a display-referred image to PNG (8/16 bit), JPEG (8 bit) or TIFF (8/16 bit).
 
@@ -206,22 +269,30 @@ def write_display(
         path: output file; the format comes from the extension (``.png``, ``.jpg``,
             ``.jpeg``, ``.tif``, ``.tiff``).
         display_rgb: ``(H, W, 3)`` (or ``(H, W)`` grey, ``(H, W, 4)`` with alpha for
-            PNG/TIFF): float in [0, 1], already encoded (e.g. sRGB) and clipped; or uint8 /
-            uint16 code values.
-        bits: 8 or 16 bits per channel (JPEG: 8 only).
+            PNG/TIFF): float in [0, 1], already encoded for ``display`` and clipped; or
+            uint8 / uint16 code values.
+        bits: 8 or 16 bits per channel (JPEG: 8 only; PQ and HLG: 16 only).
         overwrite: when ``False``, refuse to replace an existing file
             (``FileExistsError``).
         quality: JPEG quality, 1-100.
         compression: PNG/TIFF zlib level, 0 (stored) to 9 (smallest, slowest); 1 by
             default, as OpenCV (Sub-filtered PNG rows, run-length matching: see
             :data:`DEFAULT_COMPRESSION` for sizes and times).
+        display: the display the code values were encoded for, a name
+            (``"sRGB"``, ``"Display P3"``, ``"ITU-R BT.2020"``, ``"ITU-R BT.2100 PQ"``,
+            ``"ITU-R BT.2100 HLG"``, ``"linear"``, ``"gamma"`` for 2.2; case and
+            separators do not matter) or a :class:`~hdrjax.display.Display` (another
+            gamma). It only tags the file (see the module docstring); the pixels are
+            written as given. For PQ the ICC profile puts white at 1000 cd/m² (the
+            encoder's default peak); ``cICP`` keeps the absolute scale.
 
     Returns:
         The path written. The file is written to a temporary name in the same folder and
         renamed into place.
 
     Raises:
-        ValueError: unknown extension, bad shape or dtype, 16-bit JPEG.
+        ValueError: unknown extension or display, bad shape or dtype, 16-bit JPEG, PQ or
+            HLG in 8 bits or in JPEG.
         FileExistsError: ``path`` exists and ``overwrite`` is ``False``.
     """
     path = Path(path)
@@ -231,18 +302,31 @@ def write_display(
             f"{path.name}: unknown display format {path.suffix!r}; expected .png, .jpg, .jpeg, "
             ".tif or .tiff"
         )
+    disp = _resolve(display)
+    if fmt == "jpeg" and disp.hdr:
+        raise ValueError(
+            f"{path.name}: JPEG holds 8 bits per channel, too few for {disp.name}; write a "
+            ".png or .tif with bits=16"
+        )
     if fmt == "jpeg" and bits != 8:
         raise ValueError(f"{path.name}: JPEG holds 8 bits per channel; use PNG or TIFF for bits=16")
+    if disp.hdr and bits != 16:
+        # an 8-bit PQ step is 4 % of the luminance at 100 cd/m² (7 % at 1, HLG's 2 %):
+        # visible bands, where BT.2100 codes 10 or 12 bits
+        raise ValueError(f"{path.name}: {disp.name} needs 16-bit code values; use bits=16")
     if not 1 <= int(quality) <= 100:
         raise ValueError(f"quality must be in 1..100, got {quality}")
     compression = _check_compression(compression)
     code = to_code_values(display_rgb, bits)
+    grey = code.shape[2] == 1
     if fmt == "png":
-        data = encode_png(code, compression)
+        data = encode_png(code, compression, display=disp)
     elif fmt == "tiff":
-        data = encode_tiff(code, _srgb_icc(), compression)
+        data = encode_tiff(code, display_profile(disp, grey=grey, peak=_peak()), compression)
     else:
-        data = encode_jpeg(code, quality=quality, icc=_srgb_icc())
+        data = encode_jpeg(
+            code, quality=quality, icc=display_profile(disp, grey=grey, peak=_peak())
+        )
     with atomic_path(path, overwrite=overwrite) as tmp:
         tmp.write_bytes(data)
     return path
