@@ -34,6 +34,7 @@ function to it):
 """
 
 import numbers
+import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -227,6 +228,12 @@ def weights(value: Any, name: str = "weights") -> Any:
     if w.shape != (3,) or not np.all(np.isfinite(w)):
         raise ValueError(f"{name}: expected three finite numbers (w_r, w_g, w_b), got {value!r}")
     return value
+
+
+def name_key(name: str) -> str:
+    """A name compared case- and separator-insensitively (``"ITU-R BT.2020"`` →
+    ``"iturbt2020"``): colour spaces, displays, observers."""
+    return re.sub(r"[^0-9a-z]", "", name.lower())
 
 
 def one_of(value: Any, name: str, options: Sequence[str]) -> Any:

@@ -24,7 +24,6 @@ Y by up to a few per cent for saturated colours (CAT02 from E to D65: Y row
 
 import dataclasses
 import functools
-import re
 from collections.abc import Sequence
 
 import jax.numpy as jnp
@@ -97,10 +96,6 @@ SRGB_FROM_XYZ = (
 """XYZ→sRGB matrix of IEC 61966-2-1:1999 (5.2), as the standard rounds it."""
 
 
-def _key(name: str) -> str:
-    return re.sub(r"[^0-9a-z]", "", name.lower())
-
-
 @functools.cache
 def _srgb() -> Space:
     # IEC 61966-2-1 gives the matrix to 4 decimals (its Y row: BT.709's weights), and
@@ -117,7 +112,7 @@ def _named(key: str) -> Space:
         return Space(XYZ_SPACE, XYZ_CHROMATICITIES, np.eye(3), np.eye(3))
     import colour  # slow import (~2 s): only for spaces other than sRGB
 
-    names = {_key(n): n for n in colour.RGB_COLOURSPACES}
+    names = {_check.name_key(n): n for n in colour.RGB_COLOURSPACES}
     if key not in names:
         raise ValueError(
             f"working space: unknown name {key!r}; expected 'CIE XYZ' or a colour-science "
@@ -157,7 +152,7 @@ def space(value: SpaceLike = None) -> Space:
     if isinstance(value, Space):
         return value
     if isinstance(value, str):
-        return _named(_key(value))
+        return _named(_check.name_key(value))
     c = np.asarray(value, dtype=np.float64).reshape(-1)
     if c.shape != (8,) or not np.all(np.isfinite(c)):
         raise ValueError(
@@ -170,17 +165,17 @@ def space(value: SpaceLike = None) -> Space:
 def check_cat(cat: str) -> str:
     """colour-science's name of a chromatic adaptation transform (case and separators do
     not matter). Raises ValueError naming the known ones."""
-    if _key(cat) == "cat02":
+    if _check.name_key(cat) == "cat02":
         return DEFAULT_CAT
     import colour
 
-    names = {_key(n): n for n in colour.CHROMATIC_ADAPTATION_TRANSFORMS}
-    if _key(cat) not in names:
+    names = {_check.name_key(n): n for n in colour.CHROMATIC_ADAPTATION_TRANSFORMS}
+    if _check.name_key(cat) not in names:
         raise ValueError(
             f"cat: unknown chromatic adaptation transform {cat!r}; expected one of "
             + ", ".join(sorted(colour.CHROMATIC_ADAPTATION_TRANSFORMS))
         )
-    return names[_key(cat)]
+    return names[_check.name_key(cat)]
 
 
 @functools.lru_cache(maxsize=128)
@@ -251,7 +246,9 @@ def convert(
     """Apply a conversion matrix to linear RGB, channels last: ``rgb @ matrix.T``.
 
     Differentiable; runs under jit/vmap; float16 input is computed in float32. A NaN or
-    Inf channel reaches the other channels of its own pixel only.
+    Inf channel reaches the other channels of its own pixel only. Finite pixels stay
+    finite: results beyond the dtype's range (inputs within a factor ~4 of its largest
+    value) saturate at ± that value.
     """
     _check.real(rgb, "rgb")
     x = jnp.asarray(rgb)
@@ -262,7 +259,13 @@ def convert(
     m = jnp.asarray(matrix, x.dtype)
     if m.shape != (3, 3):
         raise ValueError(f"matrix: expected a 3×3 matrix, got shape {m.shape}")
-    return x @ m.T
+    # as scaled slices, not a dot: XLA:CPU fuses these into the consumer (the operator's
+    # pass), where a dot writes the converted image out first
+    r, g, b = x[..., 0:1], x[..., 1:2], x[..., 2:3]
+    y = jnp.concatenate([r * m[i, 0] + g * m[i, 1] + b * m[i, 2] for i in range(3)], axis=-1)
+    top = jnp.finfo(x.dtype).max
+    finite = jnp.all(jnp.isfinite(x), axis=-1, keepdims=True)
+    return jnp.where(finite, jnp.clip(y, -top, top), y)
 
 
 def convert_to(

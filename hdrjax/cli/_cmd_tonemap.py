@@ -396,6 +396,12 @@ def describe_conversion(img, args: argparse.Namespace | None = None) -> str:
     """One line: the file's primaries and white, and the working space they go to."""
     space, cat = colour_settings(args)
     src = img.space
+    if img.kind == "spectral":
+        wl = img.wavelengths
+        return (
+            f"spectral: {len(wl)} bands, {wl[0]:g}-{wl[-1]:g} nm, integrated to CIE XYZ "
+            f"(CIE 1931 2° observer), converted to {space.name}"
+        )
     if src == space:
         return f"primaries: {src.name}, working space {space.name} (not converted)"
     c = ", ".join(f"{v:.4f}" for v in src.chromaticities[:6])

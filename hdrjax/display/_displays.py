@@ -11,7 +11,8 @@ Coding-independent code points (``cicp``) are ITU-T H.273's: colour primaries 1 
 """
 
 import dataclasses
-import re
+
+from .. import _check
 
 DEFAULT_DISPLAY = "sRGB"
 DEFAULT_PEAK = 1000.0
@@ -56,11 +57,7 @@ DISPLAYS: dict[str, Display] = {
 }
 
 
-def _key(name: str) -> str:
-    return re.sub(r"[^0-9a-z]", "", name.lower())
-
-
-_BY_KEY = {_key(n): d for n, d in DISPLAYS.items()}
+_BY_KEY = {_check.name_key(n): d for n, d in DISPLAYS.items()}
 _BY_KEY.update({"p3": DISPLAYS["Display P3"], "bt2020": DISPLAYS["ITU-R BT.2020"]})
 _BY_KEY.update({"pq": DISPLAYS["ITU-R BT.2100 PQ"], "hlg": DISPLAYS["ITU-R BT.2100 HLG"]})
 
@@ -75,14 +72,14 @@ def display(name: "str | Display", gamma: float | None = None) -> Display:
     """
     if isinstance(name, Display):
         return name
-    if _key(name) == "gamma":
+    if _check.name_key(name) == "gamma":
         g = 2.2 if gamma is None else float(gamma)
         if not g > 0:
             raise ValueError(f"gamma: expected a number > 0, got {gamma!r}")
         cicp = (1, 4, 0, 1) if g == 2.2 else None
         return Display(f"gamma {g:g}", "sRGB", "gamma", g, cicp)
     try:
-        return _BY_KEY[_key(name)]
+        return _BY_KEY[_check.name_key(name)]
     except KeyError:
         known = ", ".join(repr(n) for n in [*DISPLAYS, "gamma"])
         raise ValueError(f"display: unknown name {name!r}; expected one of {known}") from None

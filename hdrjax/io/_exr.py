@@ -9,6 +9,8 @@ image (RGB)   ``R``, ``G``, ``B``                    ``Y`` (grey), ``Y``/``RY``/
 spectral      ``S0.<λ>nm`` (decimal comma, e.g.      same, with ``.`` or ``,``
               ``S0.550,000000nm``), attribute
               ``spectralLayoutVersion``
+reflective    ``T.<λ>nm`` (channel names keep the    same, with ``.`` or ``,``
+spectral      ``T.`` prefix)
 alpha         ``A``
 depth         ``Z``
 position      ``P.X``, ``P.Y``, ``P.Z``              ``position.*``, ``Pworld.*``, ``x/y/z``,
@@ -76,6 +78,10 @@ _POSITION_GROUPS = {"P", "position", "Position", "Pworld", "P_world", "pos"}
 _OBJECT_ID_NAMES = {"object_id", "objectId", "ObjectID", "objectID", "object_index", "id", "ID"}
 _ORDER = ["R", "G", "B", "A", "X", "Y", "Z", "x", "y", "z", "u", "v", "w"]
 _SPECTRAL_RE = re.compile(r"^(\d+(?:[.,]\d+)?)(nm)$")
+# Fichet, Pacanowski & Wilkie 2021 (JCGT 10(3)): emissive bands in group S0 (S1-S3 are the
+# other Stokes components, read as layers), reflective bands in group T
+_SPECTRAL_GROUPS = ("S0", "T")
+_REFLECTIVE = "T"
 
 _COMPRESSION = {
     "none": "NO_COMPRESSION",
@@ -131,8 +137,9 @@ def _upsample(arr: np.ndarray, xs: int, ys: int, h: int, w: int) -> np.ndarray:
 
 def _split(name: str) -> tuple[str, str]:
     """``"P.X"`` → ``("P", "X")``; ``"R"`` → ``("", "R")``; spectral names keep their dot."""
-    if name.startswith("S0.") and _SPECTRAL_RE.match(name[3:]):
-        return "S0", name[3:]
+    group, dot, rest = name.partition(".")
+    if dot and group in _SPECTRAL_GROUPS and _SPECTRAL_RE.match(rest):
+        return group, rest
     prefix, dot, base = name.rpartition(".")
     return (prefix, base) if dot else ("", name)
 
@@ -322,11 +329,13 @@ def _image_from_group(
     if "Y" in s and not ({"X", "Z"} <= s):
         return stack_channels(chans, [full("Y")]), ("Y",), ["Y"], None
     spec = [(float(m.group(1).replace(",", ".")), b) for b in bases if (m := _SPECTRAL_RE.match(b))]
-    if spec and group in ("S0", ""):
+    if spec and group in ("", *_SPECTRAL_GROUPS):
         spec.sort()
         used = [b for _, b in spec]
         wl = np.array([v for v, _ in spec], dtype=np.float32)
-        return stack_channels(chans, [full(b) for b in used]), tuple(used), used, wl
+        # the T. prefix stays in the names: it is what says the bands are reflectance
+        names = tuple(full(b) for b in used) if group == _REFLECTIVE else tuple(used)
+        return stack_channels(chans, [full(b) for b in used]), names, used, wl
     return None
 
 
@@ -595,8 +604,8 @@ def read_exr(
 # -- writing ------------------------------------------------------------------------------
 
 
-def _spectral_name(wl: float) -> str:
-    return f"S0.{wl:.6f}".replace(".", ",").replace("S0,", "S0.") + "nm"
+def _spectral_name(wl: float, group: str = "S0") -> str:
+    return f"{group}." + f"{wl:.6f}".replace(".", ",") + "nm"
 
 
 def _layer_channel_names(img: M.LayeredImage, key: str, arr: np.ndarray) -> list[str]:
@@ -715,9 +724,12 @@ def exr_parts(
     main: dict[str, np.ndarray] = {}
     kind = img.kind
     if kind == "spectral":
-        names = [_spectral_name(float(w)) for w in img.wavelengths]
+        from ..spectral import spectral_kind
+
+        group = _REFLECTIVE if spectral_kind(img.channels) == "reflective" else "S0"
+        names = [_spectral_name(float(w), group) for w in img.wavelengths]
         header["spectralLayoutVersion"] = "1.0"
-        if img.quantity == "radiance":
+        if img.quantity == "radiance" and group == "S0":
             header["emissiveUnits"] = "W.m^-2.sr^-1"
     elif kind == "ych":
         names = ["Y", "RY", "BY"]

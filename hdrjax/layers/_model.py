@@ -28,7 +28,6 @@ import numpy as np
 from jaxtyping import Float
 
 from .. import spaces as _spaces
-from .._colour import luminance_weights as _luminance_weights
 from ._errors import LayerShapeError, MissingLayerError, ReadError
 
 # Layer names fixed for the known kinds of data (Birukov et al. 2022, section 3).
@@ -363,8 +362,9 @@ class LayeredImage:
 
     @property
     def luminance_weights(self) -> tuple[float, float, float]:
-        """Luminance weights of the image's primaries (``hdrjax.luminance_weights``)."""
-        return _luminance_weights(self.chromaticities)
+        """Luminance weights of :meth:`native_rgb` (the Y row of its RGB→XYZ matrix:
+        ``hdrjax.luminance_weights`` of the file's primaries; (0, 1, 0) for XYZ)."""
+        return self.space.weights
 
     @property
     def kind(self) -> str:
@@ -383,21 +383,28 @@ class LayeredImage:
 
     @property
     def space(self) -> "_spaces.Space":
-        """The linear RGB space of the file's pixels (its primaries and white):
-        :attr:`chromaticities`, or sRGB/BT.709 with D65 when the file declares none."""
+        """The linear RGB space of :meth:`native_rgb` (the file's primaries and white):
+        :attr:`chromaticities`, or sRGB/BT.709 with D65 when the file declares none; CIE
+        XYZ for a spectral image."""
+        if self.kind == "spectral":
+            return _spaces.space(_spaces.XYZ_SPACE)
         return _spaces.space(self.chromaticities)
 
     def native_rgb(self) -> Float[np.ndarray, "H W 3"]:
         """Linear RGB in the file's own primaries (:attr:`space`), ``(H, W, 3)`` float32,
         same unit as the image: no conversion.
 
-        A single-channel image is replicated to grey. A luminance/chroma image is rebuilt
+        A spectral image is integrated to CIE XYZ (:func:`hdrjax.spectral.spectral_to_xyz`,
+        CIE 1931 2° observer): emissive channels (``S0.<λ>nm``, radiance per nm) give Y in
+        cd/m² (683 lm/W); reflective ones (``T.<λ>nm``) give XYZ under D65 with a white
+        reflector at Y = 1. A single-channel image is replicated to grey. A luminance/chroma image is rebuilt
         as OpenEXR does: ``R = (RY + 1) Y``, ``B = (BY + 1) Y`` and
         ``G = (Y - w_r R - w_b B) / w_g`` with the image's luminance weights.
 
         Raises:
-            ValueError: the image has no RGB interpretation (spectral, or channels that
-                are not R, G, B / Y / Y, RY, BY).
+            ValueError: the image has no RGB interpretation (channels that are not R, G,
+                B / Y / Y, RY, BY / wavelengths), or a spectral sampling that cannot be
+                integrated.
         """
         kind = self.kind
         img = self.image
@@ -412,14 +419,17 @@ class LayeredImage:
             b = (img[:, :, 2] + 1.0) * y
             g = (y - np.float32(wr) * r - np.float32(wb) * b) / np.float32(wg)
             return np.stack([r, g, b], axis=2).astype(np.float32, copy=False)
-        what = (
-            f"a spectral image with {img.shape[2]} wavelengths"
-            if kind == "spectral"
-            else f"channels {', '.join(self.channels)}"
-        )
+        if kind == "spectral":
+            from ..spectral import spectral_kind, spectral_to_xyz
+
+            try:
+                xyz = spectral_to_xyz(img, self.wavelengths, kind=spectral_kind(self.channels))
+            except ValueError as e:
+                raise ValueError(f"{self.name}: {e}") from None
+            return np.ascontiguousarray(xyz, dtype=np.float32)
         raise ValueError(
-            f"{self.name}: has no RGB interpretation ({what}); expected R, G, B or Y or "
-            "Y, RY, BY channels"
+            f"{self.name}: has no RGB interpretation (channels {', '.join(self.channels)}); "
+            "expected R, G, B or Y or Y, RY, BY or spectral channels"
         )
 
     def conversion(

@@ -143,7 +143,33 @@ def test_spectral_round_trip(tmp_path):
     assert got.kind == "spectral" and got.unit == "W/(sr·m²)"
     np.testing.assert_array_equal(got.wavelengths, wl)
     np.testing.assert_array_equal(got.image, img.image)
-    with pytest.raises(ValueError, match="no RGB interpretation"):
-        got.rgb()
+    # 4 irregular bands: the cubic spline's minimum; read back, they integrate as written
+    np.testing.assert_array_equal(got.rgb(), img.rgb())
+    assert got.rgb().shape == (3, 4, 3) and np.isfinite(got.rgb()).all()
     with pytest.raises(ValueError, match="Radiance files hold RGB"):
         hio.write(tmp_path / "spec.hdr", LayeredImage(image=img.image, layers=img.layers))
+
+
+def test_reflective_spectral_t_channels(tmp_path):
+    """Fichet et al. 2021's reflective bands ``T.<λ>nm`` (decimal comma or dot, as another
+    program writes them) are the spectral main image; the ``T.`` prefix stays in the channel
+    names, so writing keeps them reflective (``T.`` channels, no ``emissiveUnits``)."""
+    rng = np.random.default_rng(8)
+    planes = {w: rng.random((3, 5)).astype(np.float32) for w in (400.5, 450.0, 500.25)}
+    names = {400.5: "T.400,5nm", 450.0: "T.450nm", 500.25: "T.500.25nm"}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    header["spectralLayoutVersion"] = "1.0"
+    p = tmp_path / "refl.exr"
+    OpenEXR.File(header, {names[w]: a for w, a in planes.items()}).write(str(p))
+    got = hio.read(p)
+    assert got.kind == "spectral" and not got.layers.keys() - {"wavelengths"}
+    assert got.channels == ("T.400,5nm", "T.450nm", "T.500.25nm")
+    np.testing.assert_array_equal(got.wavelengths, np.array([400.5, 450.0, 500.25], np.float32))
+    np.testing.assert_array_equal(got.image, np.stack(list(planes.values()), axis=2))
+    again = hio.write(tmp_path / "refl2.exr", got)
+    with OpenEXR.File(str(again), separate_channels=True) as f:
+        assert sorted(f.parts[0].channels) == ["T.400,500000nm", "T.450,000000nm", "T.500,250000nm"]
+        assert "emissiveUnits" not in f.parts[0].header
+    back = hio.read(again)
+    assert back.channels == ("T.400,500000nm", "T.450,000000nm", "T.500,250000nm")
+    np.testing.assert_array_equal(back.image, got.image)

@@ -292,14 +292,28 @@ def test_pfm_round_trip_and_layout(tmp_path):
     np.testing.assert_array_equal(got.rgb()[:, :, 1], grey)
 
 
-def test_rgb_raises_for_spectral():
+def test_rgb_of_spectral_images():
+    """A flat emissive spectrum of 1 W/(sr·m²·nm) over 400–700 nm (held constant beyond, as
+    colour-science extrapolates) has Y = 683 lm/W × ΣV(λ) over 360–830 nm at 1 nm; its RGB
+    with the working-space weights gives that luminance back. Too few bands to interpolate
+    raise a one-line error naming the image."""
+    import colour
+
     img = LayeredImage(
+        image=np.ones((2, 2, 31), np.float32),
+        layers={"wavelengths": np.arange(400, 701, 10, dtype=np.float32)},
+    )
+    assert img.kind == "spectral"
+    v = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].values[:, 1].sum()
+    np.testing.assert_allclose(img.luminance(), 683.0 * v, rtol=1e-5)
+    y = img.rgb() @ np.asarray(img.luminance_weights_in())
+    np.testing.assert_allclose(y, 683.0 * v, rtol=1e-5)
+    four = LayeredImage(
         image=np.ones((2, 2, 4), np.float32),
         layers={"wavelengths": np.array([400, 500, 600, 700], np.float32)},
     )
-    assert img.kind == "spectral"
-    with pytest.raises(ValueError, match="no RGB interpretation"):
-        img.rgb()
+    with pytest.raises(ValueError, match=r"^image: wavelengths: expected at least 6 regularly"):
+        four.rgb()
 
 
 # -- display export ----------------------------------------------------------------------
