@@ -28,6 +28,16 @@ def ln_max(dtype) -> float:
     return float(x)
 
 
+def saturate_finite(y: Array, x: Array) -> Array:
+    """``y``, a linear map of the pixels ``x`` (channels last), with the pixels whose
+    inputs are all finite clamped to the dtype's range: a colour matrix or spectral
+    integration of values near the float maximum exceeds it, and finite in must stay
+    finite out. Pixels with a NaN or Inf input keep their non-finite result."""
+    top = jnp.finfo(y.dtype).max
+    finite = jnp.all(jnp.isfinite(x), axis=-1, keepdims=True)
+    return jnp.where(finite, jnp.clip(y, -top, top), y)
+
+
 def inverse_pow2(x: Array) -> Array:
     """``2^-e`` with ``2^(e-1) ≤ |x| < 2^e``: ``|x| · inverse_pow2(x)`` lies in ``[0.5, 1)``.
 

@@ -32,6 +32,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from . import _check
 from ._colour import REC709_CHROMATICITIES, normalised_primary_matrix
+from ._scale import saturate_finite
 
 DEFAULT_SPACE = "sRGB"
 """The default working space: linear sRGB/ITU-R BT.709 primaries, D65 white."""
@@ -263,9 +264,7 @@ def convert(
     # pass), where a dot writes the converted image out first
     r, g, b = x[..., 0:1], x[..., 1:2], x[..., 2:3]
     y = jnp.concatenate([r * m[i, 0] + g * m[i, 1] + b * m[i, 2] for i in range(3)], axis=-1)
-    top = jnp.finfo(x.dtype).max
-    finite = jnp.all(jnp.isfinite(x), axis=-1, keepdims=True)
-    return jnp.where(finite, jnp.clip(y, -top, top), y)
+    return saturate_finite(y, x)
 
 
 def convert_to(

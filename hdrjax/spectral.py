@@ -51,6 +51,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from . import _check
+from ._scale import saturate_finite
 
 K_M = 683.0
 """Maximum luminous efficacy of photopic vision, lm/W (CIE 015:2018; the SI candela's
@@ -342,7 +343,7 @@ def spectral_to_xyz(
             f"({w.shape[0]} wavelengths given), got shape {shape}"
         )
     x = _check.as_float(image)
-    return _apply(x, jnp.asarray(w, x.dtype))
+    return saturate_finite(_apply(x, jnp.asarray(w, x.dtype)), x)
 
 
 def spectral_kind(channels: Sequence[str]) -> Literal["emissive", "reflective"]:

@@ -397,9 +397,10 @@ class LayeredImage:
         A spectral image is integrated to CIE XYZ (:func:`hdrjax.spectral.spectral_to_xyz`,
         CIE 1931 2° observer): emissive channels (``S0.<λ>nm``, radiance per nm) give Y in
         cd/m² (683 lm/W); reflective ones (``T.<λ>nm``) give XYZ under D65 with a white
-        reflector at Y = 1. A single-channel image is replicated to grey. A luminance/chroma image is rebuilt
-        as OpenEXR does: ``R = (RY + 1) Y``, ``B = (BY + 1) Y`` and
-        ``G = (Y - w_r R - w_b B) / w_g`` with the image's luminance weights.
+        reflector at Y = 1. A single-channel image is replicated to grey. A
+        luminance/chroma image is rebuilt as OpenEXR does: ``R = (RY + 1) Y``,
+        ``B = (BY + 1) Y`` and ``G = (Y - w_r R - w_b B) / w_g`` with the image's luminance
+        weights.
 
         Raises:
             ValueError: the image has no RGB interpretation (channels that are not R, G,

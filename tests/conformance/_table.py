@@ -59,6 +59,11 @@ import hdrjax.tile as htile
 import hdrjax.vision as hv
 from hdrjax import stats
 
+XYZ = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1 / 3, 1 / 3)
+"""CIE XYZ stored as RGB (OpenEXR's chromaticities): converted, it leaves the RGB gamut."""
+BANDS = (400.0, 460.0, 520.0, 580.0, 640.0, 700.0)
+"""Wavelengths (nm) of the spectral case."""
+
 SCALE = 100.0
 """cd/m² per unit for the vision cases: the families then span scotopic to photopic."""
 
@@ -320,6 +325,25 @@ CASES: dict[str, Case] = {
     ),
     "srgb_encode": Case(lambda x: hd.srgb_encode(x), ("hdrjax.display.srgb_encode",), batch=True),
     "srgb_decode": Case(lambda x: hd.srgb_decode(x), ("hdrjax.display.srgb_decode",), batch=True),
+    "spaces.convert": Case(
+        lambda x: hdrjax.spaces.convert(x, hdrjax.spaces.conversion_matrix(XYZ, "ACEScg")),
+        ("hdrjax.spaces.convert",),
+        batch=True,
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "spaces.convert_to": Case(
+        lambda x: hdrjax.spaces.convert_to(x, "ACEScg"),
+        ("hdrjax.spaces.convert_to",),
+        batch=True,
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "spectral.spectral_to_xyz": Case(
+        # the three channels as six bands of a spectrum (Sprague needs six)
+        lambda x: hdrjax.spectral.spectral_to_xyz(jnp.concatenate([x, x[..., ::-1]], -1), BANDS),
+        ("hdrjax.spectral.spectral_to_xyz",),
+        batch=True,
+        accepts=EMPTY_PER_PIXEL,
+    ),
     "quantize": Case(
         lambda x: hd.quantize(np.asarray(hd.encode(x)), 16).astype(np.float32) / 65535,
         ("hdrjax.display.quantize",),

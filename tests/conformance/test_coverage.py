@@ -77,6 +77,16 @@ EXEMPT = {
     "hdrjax.layers.MissingLayerError": "error type (tests/io/test_io_read_write.py)",
     "hdrjax.layers.LayeredImage": "NumPy container validated on construction (tests/io)",
     "hdrjax.layers.normalise_unit": "unit-string normalisation (tests/io/test_layers_measure.py)",
+    # working spaces and spectra: matrices made once in NumPy (their image functions,
+    # convert and spectral_to_xyz, are cases)
+    "hdrjax.spaces.Space": "space record (tests/core/test_spaces.py)",
+    "hdrjax.spaces.space": "name lookup (tests/core/test_spaces.py)",
+    "hdrjax.spaces.check_cat": "name lookup (tests/core/test_spaces.py)",
+    "hdrjax.spaces.conversion_matrix": "3×3 matrix vs colour-science (tests/core/test_spaces.py)",
+    "hdrjax.spaces.is_identity": "matrix predicate (tests/core/test_spaces.py)",
+    "hdrjax.spaces.luminance_weights_in": "3 weights (tests/core/test_spaces.py)",
+    "hdrjax.spectral.spectral_weights": "n×3 matrix vs colour-science (test_spectral.py)",
+    "hdrjax.spectral.spectral_kind": "channel names (tests/core/test_spectral.py)",
     # measurement on layered images: NumPy side, pixel coordinates and JSON
     "hdrjax.measure.Distance": "result container (tests/io/test_layers_measure.py)",
     "hdrjax.measure.Region": "region geometry (tests/io/test_layers_measure.py)",
