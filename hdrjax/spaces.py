@@ -242,14 +242,15 @@ def luminance_weights_in(
 
 
 def convert(
-    rgb: Float[ArrayLike, "*batch 3"], matrix: Float[ArrayLike, "3 3"]
+    rgb: Float[ArrayLike, "*batch 3"], matrix: Float[ArrayLike, "3 3"], *, saturate: bool = True
 ) -> Float[Array, "*batch 3"]:
     """Apply a conversion matrix to linear RGB, channels last: ``rgb @ matrix.T``.
 
     Differentiable; runs under jit/vmap; float16 input is computed in float32. A NaN or
     Inf channel reaches the other channels of its own pixel only. Finite pixels stay
     finite: results beyond the dtype's range (inputs within a factor ~4 of its largest
-    value) saturate at ± that value.
+    value) saturate at ± that value (``saturate=False`` skips that check, for callers whose
+    values are known to be small).
     """
     _check.real(rgb, "rgb")
     x = jnp.asarray(rgb)
@@ -264,7 +265,7 @@ def convert(
     # pass), where a dot writes the converted image out first
     r, g, b = x[..., 0:1], x[..., 1:2], x[..., 2:3]
     y = jnp.concatenate([r * m[i, 0] + g * m[i, 1] + b * m[i, 2] for i in range(3)], axis=-1)
-    return saturate_finite(y, x)
+    return saturate_finite(y, x) if saturate else y
 
 
 def convert_to(

@@ -1,7 +1,6 @@
 """``hdrjax tonemap INPUT -o OUTPUT``: tone-map an HDR file to a display image."""
 
 import argparse
-import functools
 import os
 import time
 
@@ -433,34 +432,16 @@ def with_weights(op, weights):
 
 def eqx_jit_measure(op, rgb, matrix=None):
     """``op.measure(rgb)`` compiled (statistics of large images are slow eagerly), of
-    ``rgb`` converted by ``matrix`` (:func:`load_native`) in the same program."""
-    return _measure_in_space(op, rgb, matrix)
+    ``rgb`` converted by ``matrix`` (:func:`load_native`): see
+    :func:`hdrjax.operators.measure_in_space`."""
+    from ..operators import measure_in_space
+
+    return measure_in_space(op, rgb, matrix)
 
 
 def apply_in_space(op, rgb, matrix=None):
-    """``op(rgb)``, ``rgb`` converted by ``matrix`` in the same compiled program."""
-    return _apply_in_space(op, rgb, matrix)
+    """``op(rgb)``, ``rgb`` converted by ``matrix`` in the same compiled program
+    (:func:`hdrjax.operators.apply_in_space`)."""
+    from ..operators import apply_in_space as apply
 
-
-def _in_space(rgb, matrix):
-    from ..spaces import convert
-
-    return rgb if matrix is None else convert(rgb, matrix)
-
-
-def _measure_in_space(op, rgb, matrix):
-    return _jitted()[0](op, rgb, matrix)
-
-
-def _apply_in_space(op, rgb, matrix):
-    return _jitted()[1](op, rgb, matrix)
-
-
-@functools.cache
-def _jitted():
-    """The compiled measure and apply (made once: equinox imports JAX)."""
-    import equinox as eqx
-
-    measure = eqx.filter_jit(lambda o, x, m: o.measure(_in_space(x, m)))
-    apply = eqx.filter_jit(lambda o, x, m: o(_in_space(x, m)))
-    return measure, apply
+    return apply(op, rgb, matrix)

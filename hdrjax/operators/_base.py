@@ -254,6 +254,7 @@ class Prepared(eqx.Module):
     clean: bool = eqx.field(static=True, default=False)
     stats: Statistics | None = None  # measured by :func:`dispatch` (``stats_key``)
     stats_key: tuple = eqx.field(static=True, default=())
+    to_space: Array | None = None  # a 3×3 conversion the mapping applies to ``rgb``
 
     def valid(self) -> Array:
         """Boolean mask of the pixels statistics may use (finite ones)."""
@@ -808,6 +809,88 @@ def _measure_jit(op: AbstractOperator, rgb: Array) -> AbstractOperator:
     return op.measure(rgb)
 
 
+def measure_in_space(op: _Op, rgb: Array, matrix: np.ndarray | None) -> _Op:
+    """``op.measure(convert(rgb, matrix))`` compiled: the operator measured on pixels
+    converted into its working space (:func:`hdrjax.spaces.convert`; ``None``: as they are).
+
+    Statistics of luminance alone need no conversion: the luminance of the converted pixels
+    is that of ``rgb`` with the weights ``w M`` (a 3×3 matrix is linear), so the pixels are
+    read once, as they are. Operators that also read channel sums, or that have no
+    ``weights``, measure the converted pixels.
+    """
+    if matrix is None or not op.unset():
+        return _measure_jit(op, rgb) if matrix is None else op
+    if _luminance_only(op):
+        w = tuple(float(v) for v in np.asarray(op.weights_, np.float64) @ matrix)
+        measured = _measure_jit(dataclasses.replace(op, weights=w), rgb)
+        return dataclasses.replace(measured, weights=op.weights_)
+    return _measure_converted_jit(op, rgb, matrix)
+
+
+def apply_in_space(op: "AbstractOperator", rgb: Array, matrix: np.ndarray | None) -> Array:
+    """``op(convert(rgb, matrix))`` compiled, for one image ``(H, W, 3)``.
+
+    An operator that scales each pixel by a function of its luminance
+    (:class:`AbstractLuminanceCurve`) commutes with the matrix when its luminance is taken
+    with the weights ``w M``: the pixels are mapped as they are and converted on the way
+    out, in the mapping's one fused loop. Bad pixels keep the working space's rules (NaN
+    stays NaN, +Inf luminance is white, −Inf black), their luminance taken as the file's.
+    Other operators map the converted pixels."""
+    if matrix is None:
+        return _apply_jit(op, rgb)
+    if maps_luminance_ratio(op) and np.ndim(rgb) == 3:
+        w = tuple(float(v) for v in np.asarray(op.weights_, np.float64) @ matrix)
+        return _apply_converted_jit(op, w, rgb, matrix)
+    return _convert_apply_jit(op, rgb, matrix)
+
+
+def maps_luminance_ratio(op: "AbstractOperator") -> bool:
+    """Whether ``op`` multiplies each pixel by a function of its luminance and of
+    luminance statistics alone (:class:`AbstractLuminanceCurve`'s own mapping), so that it
+    commutes with a colour matrix whose luminance weights it is given."""
+    curve_mapping = getattr(type(op), "_apply", None) is AbstractLuminanceCurve._apply
+    return isinstance(op, AbstractLuminanceCurve) and curve_mapping and _luminance_only(op)
+
+
+def _luminance_only(op: "AbstractOperator") -> bool:
+    settings = op.statistics_settings()
+    has_weights = "weights" in {f.name for f in dataclasses.fields(op)}
+    return has_weights and (settings is None or not StatisticsSettings(*settings).channels)
+
+
+def _converted(rgb: Array, matrix: Any, saturate: bool = True) -> Array:
+    from ..spaces import convert
+
+    return convert(rgb, matrix, saturate=saturate)
+
+
+@eqx.filter_jit
+def _measure_converted_jit(op: AbstractOperator, rgb: Array, matrix: Array) -> AbstractOperator:
+    return op.measure(_converted(rgb, matrix))
+
+
+@eqx.filter_jit
+def _convert_apply_jit(op: AbstractOperator, rgb: Array, matrix: Array) -> Array:
+    return op(_converted(rgb, matrix))
+
+
+@eqx.filter_jit
+def _apply_converted_jit(
+    op: AbstractOperator, native_weights: tuple, rgb: Array, matrix: Array
+) -> Array:
+    # AbstractOperator.__call__'s traced path on the file's pixels and luminance, whose
+    # mapping multiplies the converted pixels by its ratio: the conversion is part of the
+    # mapping's one loop (converting its output instead reads each output three times,
+    # and the curve is evaluated again for each)
+    native = dataclasses.replace(op, weights=native_weights)
+
+    def run(p: Prepared) -> Array:
+        return native._measure(p)._apply(dataclasses.replace(p, to_space=matrix))
+
+    rgb = as_float_image(rgb)
+    return dispatch(rgb, native_weights, run, fix=True, stats=native.statistics_settings())
+
+
 def _traced(*trees: Any) -> bool:
     """Whether any array in ``trees`` is a tracer (we are inside jit/vmap/grad)."""
     return any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(trees))
@@ -848,6 +931,7 @@ __all__ = [
     "ParameterInfo",
     "Prepared",
     "StatisticsSettings",
+    "apply_in_space",
     "bound_stats",
     "count_valid",
     "dispatch",
@@ -856,6 +940,7 @@ __all__ = [
     "finish",
     "get_operator",
     "make_operator",
+    "measure_in_space",
     "operator_names",
     "param",
     "parameter",
@@ -906,7 +991,13 @@ class AbstractLuminanceCurve(AbstractOperator):
         # (4096² Reinhard: ~8 ms less CPU); elsewhere that image is read anyway
         fresh = p.clean and p.stats is not None and self.cheap_curve
         L = luminance(p.rgb, self.weights_) if fresh else p.L
-        return scale_by_luminance(p.rgb, L, self._curve, per_channel=self.cheap_curve)
+        # pixels converted to another space here (apply_in_space) keep their luminance
+        if p.to_space is not None:  # p.rgb is finite here: clamping keeps it so
+            top = jnp.finfo(p.rgb.dtype).max
+            rgb = jnp.clip(_converted(p.rgb, p.to_space, saturate=False), -top, top)
+        else:
+            rgb = p.rgb
+        return scale_by_luminance(rgb, L, self._curve, per_channel=self.cheap_curve)
 
     def curve(self, L: ArrayLike) -> Array:
         """The luminance curve alone, for plotting or inspection (parameters must be set)."""

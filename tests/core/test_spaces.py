@@ -189,3 +189,51 @@ def test_xyz_flower_is_saturated_as_in_srgb():
     want = saturation(colour.XYZ_to_RGB(native.astype(np.float64), "sRGB"))
     assert saturation(rgb) == pytest.approx(want, abs=1e-4)
     assert saturation(native) < want - 0.1
+
+
+SAMPLE_OPERATORS = ("reinhard2002", "tumblin_reinhard", "linear", "reinhard2002_local")
+"""The default, the lighting-simulation operator, the simplest, and one whose statistics
+alone take the luminance path (each check compiles four programs)."""
+
+
+def test_every_operator_takes_the_folded_path_only_when_it_commutes():
+    """The folded mapping is used exactly for operators whose mapping is
+    AbstractLuminanceCurve's own (a ratio of luminance) and whose statistics are luminance
+    alone: Schlick 1994 (own mapping), Budak 2005 and the per-channel curves do not."""
+    import hdrjax
+    from hdrjax.operators import AbstractLuminanceCurve
+    from hdrjax.operators._base import maps_luminance_ratio
+
+    ops = {n: hdrjax.make_operator(n) for n in hdrjax.operator_names() if n != "tabulated"}
+    folded = {n for n, op in ops.items() if maps_luminance_ratio(op)}
+    for name in folded:
+        cls = hdrjax.get_operator(name)
+        assert cls._apply is AbstractLuminanceCurve._apply, name
+    assert {"reinhard2002", "tumblin_reinhard", "linear"} <= folded
+    assert not folded & {"schlick1994", "budak2005", "gamma", "filmic", "reinhard2004"}
+
+
+@pytest.mark.parametrize("name", SAMPLE_OPERATORS)
+def test_operators_in_another_space_equal_them_on_converted_pixels(name):
+    """measure_in_space/apply_in_space (the command line's path: statistics of the file's
+    own luminance, conversion folded into the mapping) equal measure/apply on pixels
+    converted first; a NaN pixel stays in its pixel."""
+    import hdrjax
+    from hdrjax.operators import apply_in_space, measure_in_space
+
+    x = (RNG.lognormal(0.0, 1.5, (12, 16, 1)) * RNG.uniform(0.5, 1.5, (12, 16, 3))).astype(
+        np.float32
+    )
+    m = spaces.conversion_matrix(CARROTS)
+    op = hdrjax.make_operator(name).for_primaries(spaces.luminance_weights_in(CARROTS), None)
+    converted = jnp.asarray(spaces.convert(x, m))
+    want = np.asarray(op(converted))
+    got = np.asarray(apply_in_space(measure_in_space(op, x, m), x, m))
+    # statistics of the two luminance images agree to their rounding (~1e-7), which may
+    # move a histogram estimate by a bin (2^-10): 1e-3 of a display value
+    np.testing.assert_allclose(got, want, rtol=1e-3, atol=1e-4)
+    bad = x.copy()
+    bad[3, 4, 1] = np.nan
+    out = np.asarray(apply_in_space(measure_in_space(op, bad, m), bad, m))
+    nonfinite = ~np.isfinite(out).all(-1)
+    assert nonfinite[3, 4] and nonfinite.sum() == 1
