@@ -1,4 +1,5 @@
-"""Display: encoding for screens and files (and, from issue 4, false colour and desaturation)."""
+"""Display: encoding for screens and files (SDR and HDR displays, gamut mapping, the BT.2390
+EETF), false colour and highlight desaturation."""
 
 from ._desaturate import (
     PERCENT_ABOVE as PERCENT_ABOVE,
@@ -6,6 +7,13 @@ from ._desaturate import (
     DesaturateHighlights as DesaturateHighlights,
     desaturate_highlights as desaturate_highlights,
     highlight_threshold as highlight_threshold,
+)
+from ._displays import (
+    DEFAULT_DISPLAY as DEFAULT_DISPLAY,
+    DEFAULT_PEAK as DEFAULT_PEAK,
+    DISPLAYS as DISPLAYS,
+    Display as Display,
+    get_display as get_display,
 )
 from ._encode import (
     encode as encode,
@@ -20,4 +28,14 @@ from ._false_color import (
     false_color as false_color,
     false_color_scale as false_color_scale,
     render_figure as render_figure,
+)
+from ._gamut import (
+    DEFAULT_GAMUT as DEFAULT_GAMUT,
+    GAMUT_METHODS as GAMUT_METHODS,
+    gamut_map as gamut_map,
+)
+from ._hdr import (
+    HLG_REFERENCE_WHITE as HLG_REFERENCE_WHITE,
+    REFERENCE_WHITE as REFERENCE_WHITE,
+    bt2390_eetf as bt2390_eetf,
 )

@@ -2,7 +2,8 @@
 
 One table, read by the encoder (:func:`hdrjax.display.encode`), the file writers (PNG
 ``cICP``/``cHRM``/``gAMA``, ICC profiles in TIFF/JPEG/PNG) and the command line, so the
-pixels and the tags that describe them cannot disagree.
+pixels and the tags that describe them cannot disagree; :func:`get_display` finds an entry
+by name.
 
 Coding-independent code points (``cicp``) are ITU-T H.273's: colour primaries 1 (BT.709),
 9 (BT.2020), 12 (SMPTE EG 432-1, P3 with a D65 white); transfer characteristics 13 (IEC
@@ -62,7 +63,7 @@ _BY_KEY.update({"p3": DISPLAYS["Display P3"], "bt2020": DISPLAYS["ITU-R BT.2020"
 _BY_KEY.update({"pq": DISPLAYS["ITU-R BT.2100 PQ"], "hlg": DISPLAYS["ITU-R BT.2100 HLG"]})
 
 
-def display(name: "str | Display", gamma: float | None = None) -> Display:
+def get_display(name: "str | Display", gamma: float | None = None) -> Display:
     """The :class:`Display` of a name (case and separators do not matter; ``"P3"``,
     ``"BT2020"``, ``"PQ"``, ``"HLG"`` are short names). ``"gamma"`` is a plain power law
     with sRGB primaries (``gamma``, default 2.2; H.273 code 4 only for 2.2).
@@ -85,4 +86,4 @@ def display(name: "str | Display", gamma: float | None = None) -> Display:
         raise ValueError(f"display: unknown name {name!r}; expected one of {known}") from None
 
 
-__all__ = ["DEFAULT_DISPLAY", "DEFAULT_PEAK", "DISPLAYS", "Display", "display"]
+__all__ = ["DEFAULT_DISPLAY", "DEFAULT_PEAK", "DISPLAYS", "Display", "get_display"]

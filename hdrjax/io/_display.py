@@ -35,7 +35,7 @@ from ._atomic import atomic_path
 from ._icc import display_profile, power_law
 
 if TYPE_CHECKING:
-    from ..display._displays import Display
+    from ..display import Display
 
 DISPLAY_FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tif": "tiff", ".tiff": "tiff"}
 DEFAULT_COMPRESSION = 1
@@ -89,13 +89,13 @@ def _check_compression(compression: int) -> int:
 
 def _resolve(display: "str | Display") -> "Display":
     # imported on first write: hdrjax.display brings the operators package (~0.8 s)
-    from ..display._displays import display as find
+    from ..display import get_display as find
 
     return find(display)
 
 
 def _peak() -> float:
-    from ..display._displays import DEFAULT_PEAK
+    from ..display import DEFAULT_PEAK
 
     return DEFAULT_PEAK
 

@@ -54,7 +54,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..display._displays import Display
+    from ..display import Display
 
 ICC_VERSION = 0x02400000
 """Profile version field: 2.4.0 (ICC.1:2001-04)."""

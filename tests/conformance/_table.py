@@ -320,6 +320,47 @@ CASES: dict[str, Case] = {
     "encode_gamma": Case(
         lambda x: hd.encode(x, "gamma"), ("hdrjax.display.encode",), batch=True, out_range=(0, 1)
     ),
+    "encode_p3": Case(
+        lambda x: hd.encode(x, display="Display P3"),
+        ("hdrjax.display.encode",),
+        batch=True,
+        out_range=(0, 1),
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "encode_pq": Case(
+        lambda x: hd.encode(x, display="PQ", space="ACEScg", gamut="compress"),
+        ("hdrjax.display.encode",),
+        batch=True,
+        out_range=(0, 1),
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "encode_pq_scene": Case(
+        # the source peak is the image's largest finite value: a statistic
+        lambda x: hd.encode(x, display="PQ", scene_referred=True),
+        ("hdrjax.display.encode",),
+        reach="stat",
+        out_range=(0, 1),
+    ),
+    "encode_hlg": Case(
+        lambda x: hd.encode(x, display="HLG"),
+        ("hdrjax.display.encode",),
+        batch=True,
+        out_range=(0, 1),
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "gamut_map": Case(
+        lambda x: hd.gamut_map(x - 0.25 * jnp.mean(x, axis=-1, keepdims=True)),
+        ("hdrjax.display.gamut_map",),
+        batch=True,
+        out_range=(0, 1),
+        accepts=EMPTY_PER_PIXEL,
+    ),
+    "bt2390_eetf": Case(
+        lambda x: hd.bt2390_eetf(x, source_peak=4000.0),
+        ("hdrjax.display.bt2390_eetf",),
+        batch=True,
+        accepts=ELEMENTWISE,
+    ),
     "gamma_encode": Case(
         lambda x: hd.gamma_encode(jnp.maximum(x, 0)), ("hdrjax.display.gamma_encode",), batch=True
     ),

@@ -81,6 +81,9 @@ EXEMPT = {
     # pixels, tested against colour-science's conversion
     "hdrjax.operators.measure_in_space": "tests/core/test_spaces.py (files, every operator)",
     "hdrjax.operators.apply_in_space": "tests/core/test_spaces.py (files, every operator)",
+    # displays: a record and its name lookup (the encodings themselves are cases)
+    "hdrjax.display.Display": "display record (tests/display/test_displays.py)",
+    "hdrjax.display.get_display": "name lookup (tests/io/test_display_tags.py)",
     # working spaces and spectra: matrices made once in NumPy (their image functions,
     # convert and spectral_to_xyz, are cases)
     "hdrjax.spaces.Space": "space record (tests/core/test_spaces.py)",

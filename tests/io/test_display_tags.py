@@ -18,7 +18,7 @@ import pytest
 from PIL import Image, ImageCms
 
 import hdrjax.io as hio
-from hdrjax.display._displays import display as find_display
+from hdrjax.display import get_display as find_display
 from hdrjax.io._icc import BRADFORD, display_profile
 from hdrjax.layers import LayeredImage
 from tests._png import decode_png
