@@ -56,7 +56,13 @@ def write_frame(pipeline: Pipeline, data: np.ndarray, out: str | os.PathLike) ->
     """Write one pipeline output atomically (``FrameError`` on failure)."""
     try:
         if pipeline.encoded:
-            hio.write_display(out, data, bits=pipeline.bits, compression=pipeline.compression)
+            hio.write_display(
+                out,
+                data,
+                bits=pipeline.bits,
+                compression=pipeline.compression,
+                display=pipeline.output_display,
+            )
         else:
             hio.write(out, np.asarray(data, np.float32))
     except (ValueError, OSError) as e:

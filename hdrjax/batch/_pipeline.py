@@ -142,6 +142,10 @@ class Pipeline(eqx.Module):
             :data:`hdrjax.io.DEFAULT_COMPRESSION`).
         transfer: ``"srgb"``, ``"gamma"`` or ``"linear"`` encoding for display formats.
         gamma: exponent for ``transfer="gamma"``.
+        display: a display name (:func:`hdrjax.display.get_display`: ``"Display P3"``,
+            ``"ITU-R BT.2100 PQ"``...) instead of ``transfer``: outputs are converted from
+            ``space`` to its primaries, gamut-mapped (``gamut``) and tagged for it.
+        gamut: the gamut method with a ``display`` (``None``: the encoder's default).
         scale: factor applied to each frame first (e.g. to cd/m²).
         space: the working space frames are converted into (a :mod:`hdrjax.spaces` name;
             ``"sRGB"``: BT.709 primaries, D65).
@@ -170,6 +174,8 @@ class Pipeline(eqx.Module):
     compression: int = eqx.field(static=True, default=DEFAULT_COMPRESSION)
     transfer: Literal["srgb", "gamma", "linear"] = eqx.field(static=True, default="srgb")
     gamma: float = eqx.field(static=True, default=2.2)
+    display: str | None = eqx.field(static=True, default=None)
+    gamut: str | None = eqx.field(static=True, default=None)
     scale: float = eqx.field(static=True, default=1.0)
     vectorize: Literal["auto", "map", "vmap"] = eqx.field(static=True, default="auto")
     space: str = eqx.field(static=True, default="sRGB")
@@ -198,6 +204,12 @@ class Pipeline(eqx.Module):
             )
         if self.vectorize not in ("auto", "map", "vmap"):
             raise ValueError(f"vectorize: expected 'auto', 'map' or 'vmap', got {self.vectorize!r}")
+        if self.display is not None:
+            from ..display import get_display
+
+            disp = get_display(self.display, self.gamma)  # ValueError for unknown names
+            if disp.hdr and self.encoded and self.bits != 16:
+                raise ValueError(f"bits: {disp.name} needs 16 bits per channel, got {self.bits}")
         if not (self.gamma > 0 and self.scale > 0):
             raise ValueError(f"gamma and scale must be > 0, got {self.gamma!r}, {self.scale!r}")
 
@@ -205,6 +217,14 @@ class Pipeline(eqx.Module):
     def extension(self) -> str:
         """File extension of the outputs, with the dot."""
         return "." + self.format
+
+    @property
+    def output_display(self):
+        """The :class:`hdrjax.display.Display` outputs are encoded and tagged for."""
+        from ..display import get_display
+
+        name = self.display or {"srgb": "sRGB"}.get(self.transfer, self.transfer)
+        return get_display(name, self.gamma)
 
     @property
     def encoded(self) -> bool:
@@ -254,7 +274,10 @@ class Pipeline(eqx.Module):
             return mapped.astype(jnp.float32)
         from ..display import encode
 
-        enc = encode(mapped, self.transfer, gamma=self.gamma)
+        if self.display is None:
+            enc = encode(mapped, self.transfer, gamma=self.gamma)
+        else:
+            enc = encode(mapped, display=self.display, space=self.space, gamut=self.gamut)
         top = (1 << self.bits) - 1
         code = jnp.round(enc * top)  # encode clips to [0, 1] and maps NaN to 0
         return code.astype(jnp.uint8 if self.bits == 8 else jnp.uint16)

@@ -93,7 +93,9 @@ def register(subparsers) -> None:
         default="png",
         help="output format (default png)",
     )
-    p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
+    p.add_argument(
+        "--bits", type=int, choices=(8, 16), help="PNG/TIFF bit depth (8; 16 for PQ/HLG)"
+    )
     p.add_argument(
         "--compression",
         type=int,
@@ -106,6 +108,17 @@ def register(subparsers) -> None:
         "--transfer", choices=("srgb", "gamma", "linear"), default="srgb", help="display encoding"
     )
     p.add_argument("--gamma", type=positive_float, default=2.2, help="for --transfer gamma")
+    p.add_argument(
+        "--display",
+        metavar="NAME",
+        help="display outputs are encoded and tagged for (as tonemap --display; PQ/HLG need "
+        "--bits 16)",
+    )
+    p.add_argument(
+        "--gamut",
+        choices=("clip", "luminance", "compress"),
+        help="colours outside the display's gamut (as tonemap --gamut)",
+    )
     p.add_argument(
         "--scale", type=positive_float, default=1.0, help="multiply every frame by this first"
     )
@@ -153,6 +166,10 @@ def build_pipeline(args: argparse.Namespace):
     if args.vision:
         effects = tuple(e.strip() for e in args.vision.split(",") if e.strip())
         steps.append(step("vision", effects=effects))
+    if args.bits is None:
+        args.bits = 16 if args.display and _hdr_display(args.display) else 8
+    if args.bits == 16 and args.format == "jpg" and args.display and _hdr_display(args.display):
+        raise UsageError(f"--display {args.display} needs --format png or tif (16 bits)")
     if args.bits == 16 and args.format == "jpg":
         raise UsageError("--bits 16 needs --format png or tif (JPEG is 8-bit)")
     try:
@@ -164,12 +181,23 @@ def build_pipeline(args: argparse.Namespace):
             compression=args.compression,
             transfer=args.transfer,
             gamma=args.gamma,
+            display=args.display,
+            gamut=args.gamut,
             scale=args.scale,
             space=args.working_space,
             cat=args.cat,
         )
     except ValueError as e:
         raise UsageError(str(e)) from None
+
+
+def _hdr_display(name: str) -> bool:
+    from ..display import get_display
+
+    try:
+        return get_display(name).hdr
+    except ValueError as e:
+        raise UsageError(f"--display: {str(e).removeprefix('display: ')}") from None
 
 
 def run(args: argparse.Namespace) -> int:

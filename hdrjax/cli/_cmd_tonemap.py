@@ -72,8 +72,9 @@ def colour_settings(args: argparse.Namespace):
         space = spaces.space(getattr(args, "working_space", spaces.DEFAULT_SPACE))
         cat = spaces.check_cat(getattr(args, "cat", spaces.DEFAULT_CAT))
     except ValueError as e:
-        flag = "--cat" if "cat:" in str(e) else "--working-space"
-        raise UsageError(f"{flag}: {e}") from None
+        flag, prefix = ("--cat", "cat: ") if "cat:" in str(e) else ("--working-space", "")
+        text = str(e).removeprefix(prefix).removeprefix("working space: ")
+        raise UsageError(f"{flag}: {text}") from None
     return space, cat
 
 
@@ -149,29 +150,80 @@ def add_table_and_scale_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
-    """``--transfer``, ``--gamma``, ``--bits``: how :func:`write_output` encodes."""
+    """``--display``, ``--peak``, ``--gamut``, ``--transfer``, ``--gamma``, ``--bits``: how
+    :func:`write_output` encodes."""
+    p.add_argument(
+        "--display",
+        metavar="NAME",
+        help="display the .png/.jpg/.tif is encoded and tagged for: 'sRGB' (default), "
+        "'Display P3', 'ITU-R BT.2020', 'ITU-R BT.2100 PQ', 'ITU-R BT.2100 HLG' (short: P3, "
+        "BT2020, PQ, HLG; PQ/HLG are 16-bit)",
+    )
+    p.add_argument(
+        "--peak",
+        type=positive_float,
+        help="cd/m² of the display's white for --display PQ (default 1000)",
+    )
+    p.add_argument(
+        "--gamut",
+        choices=("clip", "luminance", "compress"),
+        help="colours outside the display's gamut: 'luminance' (default with --display: "
+        "towards the grey of the same luminance), 'compress' (ACES reference gamut "
+        "compression), 'clip' (each channel)",
+    )
     p.add_argument(
         "--transfer",
         choices=("srgb", "gamma", "linear"),
         default="srgb",
-        help="display encoding for .png/.jpg/.tif (default srgb)",
+        help="display encoding for .png/.jpg/.tif without --display (default srgb)",
     )
     p.add_argument("--gamma", type=positive_float, default=2.2, help="for --transfer gamma")
-    p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
+    p.add_argument(
+        "--bits", type=int, choices=(8, 16), help="PNG/TIFF bit depth (8; 16 for PQ/HLG)"
+    )
+
+
+def output_display(args: argparse.Namespace):
+    """The :class:`hdrjax.display.Display` of ``--display`` (or of ``--transfer``);
+    unknown names → UsageError."""
+    from ..display import get_display
+
+    name = getattr(args, "display", None)
+    if name is not None and args.transfer != "srgb":
+        raise UsageError("--transfer does not apply with --display (the display sets the curve)")
+    try:
+        return get_display(name or {"srgb": "sRGB"}.get(args.transfer, args.transfer), args.gamma)
+    except ValueError as e:
+        raise UsageError(f"--display: {str(e).removeprefix('display: ')}") from None
+
+
+def output_bits(args: argparse.Namespace) -> int:
+    """``--bits``, by default 16 for HDR displays (PQ, HLG) and 8 otherwise."""
+    if args.bits is not None:
+        return args.bits
+    return 16 if output_display(args).hdr else 8
 
 
 def check_output(args: argparse.Namespace) -> str:
     """Validate ``args.output`` against the encoding options; returns its extension."""
     ext = output_ext(args, LDR_EXT + HDR_EXT)
-    if args.bits == 16 and ext in (".jpg", ".jpeg"):
-        raise UsageError("--bits 16 needs .png or .tif output (JPEG is 8-bit)")
+    disp, bits = output_display(args), output_bits(args)
+    if bits == 16 and ext in (".jpg", ".jpeg"):
+        what = f"--display {disp.name}" if disp.hdr and args.bits is None else "--bits 16"
+        raise UsageError(f"{what} needs .png or .tif output (JPEG is 8-bit)")
+    if disp.hdr and bits == 8:
+        raise UsageError(f"--display {disp.name} needs 16 bits: leave out --bits 8")
+    if getattr(args, "peak", None) is not None and disp.transfer != "pq":
+        raise UsageError(f"--peak applies to --display PQ, not {disp.name}")
     refuse_overwriting_inputs([args.output], [args.input, args.table])
     return ext
 
 
-def encode_output(args: argparse.Namespace, display):
-    """Display-referred linear RGB → the array written to ``args.output`` (NumPy): encoded
-    for .png/.jpg/.tif, linear float for .exr/.hdr/.pfm."""
+def encode_output(args: argparse.Namespace, display, converted: bool = True):
+    """Display-referred linear RGB in the working space → the array written to
+    ``args.output`` (NumPy): encoded for the display for .png/.jpg/.tif, linear float for
+    .exr/.hdr/.pfm. ``converted=False`` says the pixels were sRGB to begin with (no colour
+    outside the gamut to map: an sRGB display only clips and encodes them)."""
     import jax
     import numpy as np
 
@@ -179,23 +231,35 @@ def encode_output(args: argparse.Namespace, display):
 
     out = display
     if output_ext(args) in LDR_EXT:
-        out = encode(out, args.transfer, gamma=args.gamma)
+        disp = output_display(args)
+        space, _ = colour_settings(args)
+        if disp.name == "sRGB" and space.is_rec709 and args.gamut is None and not converted:
+            out = encode(out, "srgb")  # the common case: no conversion, per-channel clip
+        else:
+            kw = {} if args.peak is None else {"peak": args.peak}
+            out = encode(out, display=disp, space=space, gamut=args.gamut, **kw)
     return np.asarray(jax.block_until_ready(out))
 
 
 def write_output(args: argparse.Namespace, encoded) -> None:
-    """Write :func:`encode_output`'s array to ``args.output`` (atomic); errors → DataError."""
+    """Write :func:`encode_output`'s array to ``args.output`` (atomic), tagged with its
+    display (or, for .exr, the working space's chromaticities); errors → DataError."""
     import numpy as np
 
     from .. import io as hio
     from ..display import quantize
+    from ..layers import LayeredImage
 
     try:
         with output_file(args) as path:
             if output_ext(args) in LDR_EXT:
-                hio.write_display(path, quantize(encoded, args.bits), bits=args.bits)
+                bits = output_bits(args)
+                disp = output_display(args)
+                hio.write_display(path, quantize(encoded, bits), bits=bits, display=disp)
             else:
-                hio.write(path, encoded.astype(np.float32))
+                space, _ = colour_settings(args)
+                c = None if space.is_rec709 else space.chromaticities
+                hio.write(path, LayeredImage(encoded.astype(np.float32), chromaticities=c))
     except (ValueError, OSError) as e:
         raise DataError(f"{args.output}: cannot write: {e}") from None
 
@@ -370,7 +434,7 @@ def run(args: argparse.Namespace) -> int:
     op = with_file_weights(op, img, args)
     t1 = time.perf_counter()
     measured = eqx_jit_measure(op, rgb, m)
-    out = encode_output(args, apply_in_space(measured, rgb, m))
+    out = encode_output(args, apply_in_space(measured, rgb, m), converted=m is not None)
     t_map = time.perf_counter() - t1
     n_bad = int(np.count_nonzero(~np.all(np.isfinite(rgb), axis=-1)))
     t2 = time.perf_counter()

@@ -193,7 +193,9 @@ def _encode_for(
         return _pq_scene(x, finite, method, weights, peak, scene_max)
     if tf == "hlg" and scene_referred:
         x = x * HLG_REFERENCE_WHITE
-    y = map_gamut(x, method, weights, 1.0)
+    # below black the gamut method decides; above white each channel burns to white, as
+    # the operators' white points intend (L_white: "the smallest luminance mapped to white")
+    y = jnp.minimum(map_gamut(x, method, weights, None), 1.0)
     if tf == "pq":
         out = pq_inverse_eotf(y * (jnp.asarray(peak, dtype) / PQ_PEAK))
     elif tf == "hlg":
@@ -235,8 +237,11 @@ def encode(
         space: the working space ``linear`` is in (a :mod:`hdrjax.spaces` name or
             chromaticities; sRGB by default), converted to the display's primaries.
         gamut: ``"clip"``, ``"luminance"`` or ``"compress"``
-            (:func:`hdrjax.display.gamut_map`). ``None``: ``"luminance"`` with a display
-            (only colours the display cannot show change), per-value clipping without.
+            (:func:`hdrjax.display.gamut_map`) for channels below black. ``None``:
+            ``"luminance"`` with a display (only colours the display cannot show change),
+            per-value clipping without. Channels above white burn to white one by one,
+            whatever the method (an operator's white point means exactly that; for
+            display-referred input only, the scene-referred PQ roll-off keeps hue).
         peak: cd/m² of white for PQ (1000 by default, BT.2100's reference HLG display
             peak, also used for HLG monitoring); only PQ is absolute, so ``None`` for the
             others.

@@ -97,3 +97,68 @@ def test_desaturate_command(tmp_path, capsys):
     )  # stored as half, like the input
     assert main(["desaturate", CORNELL, "-o", str(out)]) == 0
     assert "automatic, 2 x L90" in capsys.readouterr().out
+
+
+def _xyz_crop(tmp_path):
+    """A 12×16 crop of XYZ.exr (CIE XYZ primaries), written with its chromaticities."""
+    img = hio.read(DATA / "XYZ.exr")
+    crop = LayeredImage(img.image[200:212, 300:316], chromaticities=img.chromaticities)
+    return hio.write(tmp_path / "xyz.exr", crop), crop
+
+
+@pytest.mark.parametrize(
+    "display, cicp, bits",
+    [("P3", (12, 13, 0, 1), 8), ("PQ", (9, 16, 0, 1), 16), ("HLG", (9, 18, 0, 1), 16)],
+)
+def test_tonemap_display_encodes_and_tags_the_png(tmp_path, capsys, display, cicp, bits):
+    """--display: the PNG's code values are encode(display=...) of the operator's output
+    (sRGB working space) and its cICP chunk names that display (read by the test's own
+    PNG parser); PQ and HLG are 16-bit by default."""
+    from hdrjax import spaces
+    from hdrjax.display import encode, quantize
+
+    from .._png import decode_png
+
+    path, crop = _xyz_crop(tmp_path)
+    out = tmp_path / "o.png"
+    args = ["tonemap", str(path), "-o", str(out), "--method", "linear", "--set", "L_max=2"]
+    assert main([*args, "--display", display]) == 0
+    pixels, chunks = decode_png(out.read_bytes())
+    assert tuple(chunks[b"cICP"]) == cicp
+    assert pixels.dtype.itemsize * 8 == bits
+    srgb = spaces.convert_to(crop.image, crop.chromaticities)
+    want = quantize(encode(np.asarray(srgb) / 2.0, display=display), bits)
+    # the command line converts inside the operator's program: float32 rounding, 1 code
+    np.testing.assert_allclose(pixels.astype(np.int64), want.astype(np.int64), rtol=0, atol=1)
+
+
+def test_tonemap_exr_keeps_the_working_spaces_chromaticities(tmp_path, capsys):
+    from hdrjax import spaces
+
+    path, _ = _xyz_crop(tmp_path)
+    out = tmp_path / "o.exr"
+    args = ["tonemap", str(path), "-o", str(out), "--method", "linear", "--set", "L_max=2"]
+    assert main([*args, "--working-space", "ACEScg"]) == 0
+    got = hio.read(out).chromaticities
+    np.testing.assert_allclose(got, spaces.space("ACEScg").chromaticities, atol=1e-7)
+    assert main([*args]) == 0  # sRGB: no attribute (OpenEXR's default is Rec.709)
+    assert hio.read(out).chromaticities is None
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--display", "PQ", "--bits", "8"], "--display ITU-R BT.2100 PQ needs 16 bits"),
+        (["--peak", "500"], "--peak applies to --display PQ, not sRGB"),
+        (["--display", "CRT"], "--display: unknown name 'CRT'; expected one of 'sRGB'"),
+        (["--working-space", "Adobe99"], "--working-space: unknown name 'adobe99'"),
+        (["--cat", "CAT99"], "--cat: unknown chromatic adaptation transform 'CAT99'"),
+        (["--display", "P3", "--transfer", "gamma"], "--transfer does not apply with --display"),
+    ],
+)
+def test_tonemap_colour_option_errors(tmp_path, capsys, extra, message):
+    path, _ = _xyz_crop(tmp_path)
+    assert main(["tonemap", str(path), "-o", str(tmp_path / "o.png"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o.png").exists()
