@@ -114,7 +114,6 @@ def _values(args: argparse.Namespace):
     """(values (H, W), name, unit) from the file and --layer."""
     import numpy as np
 
-    from .. import luminance
     from ..layers import MissingLayerError
 
     img = read_image(args.input)
@@ -139,7 +138,7 @@ def _values(args: argparse.Namespace):
         v = img.image[:, :, 0]
     else:
         try:
-            v = np.asarray(luminance(img.rgb(), img.luminance_weights))
+            v = np.asarray(img.luminance())  # the file's own (photometric) luminance
         except ValueError as e:
             raise DataError(str(e)) from None
     name = img.quantity if img.quantity != "relative" else "relative luminance"

@@ -453,7 +453,7 @@ def write(
             if main.kind == "y":
                 arr = main.image
             elif main.kind in ("rgb", "ych"):
-                arr = main.rgb()
+                arr = main.rgb()  # PFM has no primaries: readers take sRGB
             else:
                 raise ValueError(
                     f"{path.name}: PFM holds 1 or 3 channels; image has {', '.join(main.channels)}"
@@ -501,7 +501,8 @@ def _encode_hdr(img: M.LayeredImage, *, rle: bool, sidecars: Sequence[str] = ())
         lines.append("SIDECARS=" + " ".join(sidecars))
     if img.chromaticities is not None:
         lines.append("PRIMARIES=" + " ".join(f"{c:.6g}" for c in img.chromaticities))
-    return _rgbe.encode_rgbe(img.rgb(), rle=rle, header_lines=lines)
+    # the pixels as they are, in the primaries the PRIMARIES line names
+    return _rgbe.encode_rgbe(img.native_rgb(), rle=rle, header_lines=lines)
 
 
 def _write_sidecar(

@@ -302,9 +302,9 @@ def absolute_rgb(
     if scale is not None and not (float(scale) > 0 and np.isfinite(float(scale))):
         raise ValueError(f"scale: expected a finite number > 0 (cd/m² per unit), got {scale!r}")
     if hasattr(image, "rgb") and callable(image.rgb):
-        rgb = image.rgb()
-        if chromaticities is None:
-            chromaticities = getattr(image, "chromaticities", None)
+        # a layered image: its pixels in the working space (sRGB) unless primaries are
+        # given, then in those
+        rgb = image.rgb() if chromaticities is None else image.rgb(chromaticities)
         unit = getattr(image, "unit", None)
         factor = float(scale) if scale is not None else _unit_factor(unit)
         if factor is None:

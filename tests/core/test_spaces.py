@@ -237,3 +237,20 @@ def test_operators_in_another_space_equal_them_on_converted_pixels(name):
     out = np.asarray(apply_in_space(measure_in_space(op, bad, m), bad, m))
     nonfinite = ~np.isfinite(out).all(-1)
     assert nonfinite[3, 4] and nonfinite.sum() == 1
+
+
+@pytest.mark.parametrize("ext", [".hdr", ".exr"])
+def test_files_keep_their_primaries_with_their_pixels(tmp_path, ext):
+    """An image in XYZ primaries written to Radiance (PRIMARIES line) or OpenEXR
+    (chromaticities) reads back with the same primaries and the same pixels (not the
+    working space's: the tag and the pixels agree)."""
+    import hdrjax.io as hio
+
+    xyz = RNG.uniform(0.05, 2.0, (4, 6, 3)).astype(np.float32)
+    path = hio.write(tmp_path / f"xyz{ext}", LayeredImage(xyz, chromaticities=XYZ_FILE))
+    got = read(path)
+    np.testing.assert_allclose(got.chromaticities, XYZ_FILE, rtol=1e-5)
+    # RGBE: 8-bit mantissas under one exponent per pixel
+    tol = xyz.max(-1, keepdims=True) / 128 if ext == ".hdr" else 1e-6
+    assert np.all(np.abs(got.native_rgb() - xyz) <= tol)
+    assert np.all(np.abs(got.rgb() - colour.XYZ_to_RGB(xyz, "sRGB")) <= 5 * tol)
