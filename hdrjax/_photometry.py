@@ -84,6 +84,17 @@ def tvi(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     return jnp.where(L_a < 1.148e-4, 1.38e-3, 10.0**y)
 
 
+def mesopic_weight(L: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
+    """Share of colour vision at luminance ``L``: pcond3.c ``scotscan``'s ``incolor``.
+
+    ``c = (L - 5.62e-3)/(5.62 - 5.62e-3)`` clamped to [0, 1]: 0 (rods only) at or below
+    5.62e-3 cd/m², 1 (cones only) at or above 5.62 cd/m², linear in ``L`` between.
+    """
+    _check.real(L, "L")
+    L = _check.as_float(L)
+    return jnp.clip((L - BOT_MESOPIC) / (TOP_MESOPIC - BOT_MESOPIC), 0.0, 1.0)
+
+
 def chroma_key(chromaticities: Sequence[float] | None) -> tuple[float, ...] | None:
     """Hashable, validated primaries: ``None`` for Rec.709/D65, else the 8 floats.
 
@@ -263,6 +274,7 @@ __all__ = [
     "finite_pixels",
     "headroom",
     "largest_component_reciprocal",
+    "mesopic_weight",
     "restore",
     "rgb_to_xyz",
     "rgb_to_xyz_matrix",

@@ -4,10 +4,10 @@ V. P. Budak and A. V. Petrovičev, "Realistické modelování zobrazení osvětl
 stínítku počítače" (realistic modelling of the display of lit 3D scenes on a computer
 screen), Světlo 3/2005. The algorithm (the paper's Fig. 1): convert the rendered scene
 to a *uniform colour-contrast system* whose brightness follows the Weber–Fechner law
-relative to the adaptation luminance; re-adapt from the scene's adaptation luminance to the
-display's, which the paper sets to half the display's maximum; convert back. Display gamma
-is the output encoding's (:mod:`hdrjax.display`; :class:`hdrjax.vision.Budak2005` applies
-the paper's power law ``L = C0 i^g`` itself).
+(its Eqs. 1 and 3); convert back with the display's adaptation luminance, which the paper
+sets to half the display's maximum (its Eq. 2). Display gamma is the output encoding's
+(:mod:`hdrjax.display`; :class:`hdrjax.vision.Budak2005` applies the paper's power law
+``L = C0 i^g``, its Eqs. 5–6, itself).
 
 What is *not* available, and what replaces it:
 
@@ -16,25 +16,48 @@ What is *not* available, and what replaces it:
   darker than the background) — the equation itself, the Yustova primaries and the
   placement of n and p are unpublished in any source found. Replaced by
   :class:`ConeOpponentSpace`: CIELAB's opponent formulas (CIE 15:2004,
-  ``a = 500 (f(·) - f(Y/Y_n))``, ``b = 200 (f(Y/Y_n) - f(·))``, ``f`` the cube root with
+  ``a* = 500 (f(·) - f(Y/Y_n))``, ``b* = 200 (f(Y/Y_n) - f(·))``, ``f`` the cube root with
   its linear toe) applied to Hunt–Pointer–Estévez cone responses (colour-science
-  ``MATRIX_XYZ_TO_HPE``): ``a`` compares the L cone with luminance, ``b`` luminance with
-  the S cone (HPE's S is CIE Z, so ``b`` is CIELAB's b*), each relative to the background
-  (the mean chromaticity of the image at the adaptation luminance, the paper's ``m'_p``).
-  No increment/decrement asymmetry (the paper's n, p) is modelled.
+  ``MATRIX_XYZ_TO_HPE``) relative to the background (the mean chromaticity of the image at
+  the adaptation luminance, the paper's ``m'_p``), *divided by the pixel's own*
+  ``f(Y/Y_n)``: a contrast of chromaticities, as the paper's Eq. 1 relates trichromatic
+  coordinates ``m'_o/m'_p``, rather than CIELAB's chroma, which grows with lightness. Kept
+  while brightness is compressed, CIELAB's chroma would be a larger share of a compressed
+  pixel's lightness: in a 10 cd/m² interior a near-white window at 1e5 cd/m² came out four
+  times as saturated as it is, and blue glass left the display's gamut (a negative red,
+  clipped: cyan). Scaled by the share of colour vision at the adaptation luminance
+  (pcond's mesopic weight, 0 at or below 5.62e-3 cd/m², 1 at or above 5.62 cd/m²): a
+  starlit scene is seen without colour. No increment/decrement asymmetry (the paper's
+  n, p) is modelled.
 - Shklover's brightness formula (the paper's Eq. 3) — not found. Replaced by Fechner's
-  integral of Weber's law with the adaptation-dependent Weber fraction of the Ferwerda
-  et al. 1996 threshold curve as Radiance's pcond evaluates it,
-  ``B = (L_a/ΔL(L_a)) ln(L/L_a)`` (:func:`fechner_brightness`): brightness in just-noticeable
-  differences from the adaptation level, one JND = ``ΔL(L_a)`` at ``L = L_a``.
+  law, brightness counted in just-noticeable differences above the threshold, with the
+  adaptation-dependent threshold ``ΔL(L_a)`` of the Ferwerda et al. 1996 curve as Radiance's
+  pcond evaluates it: ``B = (L_a/ΔL(L_a)) ln(L/ΔL(L_a))`` (:func:`fechner_brightness`). The
+  threshold is the zero of brightness, as in Fechner's law, so that ``B`` of the adaptation
+  level itself grows with it: counted from the adaptation level instead, every scene's
+  adaptation level had brightness 0 and was shown at half the display's maximum, a
+  starlit street as bright as a sunlit one.
 - The paper's PSF step (acuity loss before display) is :mod:`hdrjax.vision`'s ``acuity``
   effect; apply :func:`hdrjax.vision.simulate` first to include it.
 
-Keeping ``B`` fixed while re-adapting gives ``L_d = L_da (L/L_a)^(k_d/k_w)`` with
-``k = ΔL/L_a`` the Weber fractions: a dark scene (large ``k_w``) is compressed, a daylight
-one roughly kept. The colour space is pluggable: subclass :class:`AbstractContrastSpace`
-(e.g. with the Nyberg–Yustova system once its coefficients are available) and pass it as
-``space``.
+Keeping ``B`` fixed while re-adapting gives ``L_d = ΔL_d (L/ΔL_w)^(k_d/k_w)`` with
+``ΔL_w = ΔL(L_a)``, ``ΔL_d = ΔL(L_da)``, ``L_da`` the display's adaptation (half its
+maximum) and ``k = ΔL/L_a`` the Weber fractions: a scene dimmer than ``L_da`` (larger
+``k_w``) is compressed towards the display's threshold, dim and flat (a starlit scene's
+adaptation level, below its own threshold, lies below ``ΔL_d`` = 3.1 cd/m² on a
+100 cd/m² display). A scene adapted above ``L_da`` would have more JNDs above threshold
+than the display's adaptation level; it is shown as in the paper, whose inverse
+transform (Eq. 2) puts the scene's background at the display's: ``B`` is lowered by the
+excess, which gives
+``L_d = L_da (L/L_a)^(k_d/k_w)``. The two meet at ``L_a = L_da``. Chromaticity is kept
+where both the scene and the display value lie in the cube-root part (from about 2 decades
+below their backgrounds up), up to the mesopic factor. A colour beyond the display's white
+(a channel above ``display_max``) is moved towards the white of its own luminance until it
+fits, and a luminance above ``display_max`` is white: a window far brighter than the
+display fades to white at its own hue (the paper: the brightest parts' colour scale is
+adjusted) instead of being clipped per channel to another hue. The colour space is
+pluggable: subclass :class:`AbstractContrastSpace` (e.g. with the Nyberg–Yustova system
+once its coefficients are available) and pass it as ``space``.
 """
 
 import abc
@@ -46,7 +69,15 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._photometry import LMAX, LMIN, chroma_key, tvi, weights_of, xyz_matrices
+from .._photometry import (
+    LMAX,
+    LMIN,
+    chroma_key,
+    mesopic_weight,
+    tvi,
+    weights_of,
+    xyz_matrices,
+)
 from .._scale import quotient
 from .._stats import Statistics
 from ._base import (
@@ -114,32 +145,40 @@ def _finv(u: Array) -> Array:
 def fechner_brightness(
     L: Float[ArrayLike, "*shape"], L_a: Float[ArrayLike, ""]
 ) -> Float[Array, "*shape"]:
-    """Brightness in JNDs from the adaptation level: ``B = (L_a/ΔL(L_a)) ln(L/L_a)``.
+    """Brightness in JNDs above the threshold: ``B = (L_a/ΔL(L_a)) ln(L/ΔL(L_a))``.
 
-    ``ΔL`` is pcond's combined TVI (:func:`hdrjax.vision.tvi`); ``L`` and ``L_a`` in cd/m²,
-    clamped below at 1e-7 cd/m². Stands in for Shklover's formula (Budak & Petrovichev 2005,
-    Eq. 3; not found). Inverse: :func:`fechner_luminance`.
+    Fechner's integral of Weber's law with the Weber fraction ``ΔL(L_a)/L_a`` of the
+    adaptation level; ``ΔL`` is pcond's combined TVI (:func:`hdrjax.vision.tvi`), and a
+    luminance at the threshold has brightness 0. ``L`` and ``L_a`` in cd/m², clamped below
+    at 1e-7 cd/m². Stands in for Shklover's formula (Budak & Petrovichev 2005, Eq. 3; not
+    found). Inverse: :func:`fechner_luminance`.
+
+    Example:
+        >>> round(float(fechner_brightness(1.0, 1.0)), 3)  # ln(1/0.3913)/0.3913
+        2.398
     """
     _check.real(L, "L")
     L = jnp.maximum(_check.as_float(L), LMIN)
     L_a = jnp.maximum(_check.as_float(L_a), LMIN)
-    # L / L_a overflows for L near the float maximum and a dim L_a: ln L − ln L_a there
-    # (where-before-log, so that neither branch's derivative is 0·∞)
-    big = ~jnp.isfinite(jax.lax.stop_gradient(L / L_a))
-    ln = jnp.where(big, jnp.log(L) - jnp.log(L_a), jnp.log(jnp.where(big, L_a, L) / L_a))
-    return (L_a / tvi(L_a)) * ln
+    dL = tvi(L_a)
+    # L / ΔL overflows for L near the float maximum: ln L − ln ΔL there (where-before-log,
+    # so that neither branch's derivative is 0·∞)
+    big = ~jnp.isfinite(jax.lax.stop_gradient(L / dL))
+    ln = jnp.where(big, jnp.log(L) - jnp.log(dL), jnp.log(jnp.where(big, dL, L) / dL))
+    return (L_a / dL) * ln
 
 
 def fechner_luminance(
     B: Float[ArrayLike, "*shape"], L_a: Float[ArrayLike, ""]
 ) -> Float[Array, "*shape"]:
-    """Inverse of :func:`fechner_brightness`: ``L = L_a exp(B ΔL(L_a)/L_a)``."""
+    """Inverse of :func:`fechner_brightness`: ``L = ΔL(L_a) exp(B ΔL(L_a)/L_a)``."""
     _check.real(B, "B")
     L_a = jnp.maximum(_check.as_float(L_a), LMIN)
-    arg = _check.as_float(B) * tvi(L_a) / L_a
+    dL = tvi(L_a)
+    arg = _check.as_float(B) * dL / L_a
     # saturates at SATURATION × the float maximum (+Inf, and NaN colours, before)
     top = jnp.log(jnp.finfo(arg.dtype).max * SATURATION)
-    return L_a * jnp.exp(jnp.minimum(arg, top - jnp.maximum(jnp.log(L_a), 0.0)))
+    return dL * jnp.exp(jnp.minimum(arg, top - jnp.maximum(jnp.log(dL), 0.0)))
 
 
 class AbstractContrastSpace(eqx.Module):
@@ -147,7 +186,10 @@ class AbstractContrastSpace(eqx.Module):
 
     ``forward`` maps XYZ (cd/m²) to three coordinates that the observer keeps constant when
     re-adapting; ``inverse`` maps them back at another adaptation. ``background`` is the
-    XYZ of the adapting background (its Y is the adaptation luminance).
+    XYZ of the adapting background (its Y is the adaptation luminance). Coordinate 0 is the
+    brightness (the paper's ``B``): :class:`Budak2005` lowers it by the excess of the
+    scene background's over the display background's, so that a scene adapted above the
+    display shows its background at the display's.
     """
 
     @abc.abstractmethod
@@ -164,12 +206,24 @@ class AbstractContrastSpace(eqx.Module):
 
 
 class ConeOpponentSpace(AbstractContrastSpace):
-    """Fechner brightness + CIELAB-style cone-opponent coordinates (module docstring).
+    """Fechner brightness + cone-opponent contrasts of chromaticity (module docstring).
 
     Coordinates ``(B, a, b)``: ``B`` = :func:`fechner_brightness` of Y at the background's
-    luminance; ``a = 500 (f(Lc/Lc_n) - f(Y/Y_n))``; ``b = 200 (f(Y/Y_n) - f(Sc/Sc_n))`` with
-    ``Lc``, ``Sc`` the first and third rows of ``cone_matrix`` (HPE by default) applied to
-    XYZ and ``_n`` the background's values.
+    luminance;
+
+        ``a = 500 c (f(Lc/Lc_n) / f(Y/Y_n) - 1)``,
+        ``b = 200 c (1 - f(Sc/Sc_n) / f(Y/Y_n))``,
+
+    with ``Lc``, ``Sc`` the first and third rows of ``cone_matrix`` (HPE by default) applied
+    to XYZ, ``_n`` the background's values, ``f`` CIELAB's, and ``c`` =
+    :func:`hdrjax.vision.mesopic_weight` of the background luminance ``Y_n``. For a pixel
+    at the background's luminance in photopic light (``f(Y/Y_n) = 1``, ``c = 1``) ``a``,
+    ``b`` are CIELAB's a*, b* of the cone responses; elsewhere they are divided by
+    ``f(Y/Y_n)``, so that in the cube-root part (``Y/Y_n`` above (6/29)³) they depend on
+    chromaticity alone, and a colour keeps its chromaticity whatever brightness it is
+    re-adapted to. (CIELAB's own a*, b* grow with the pixel's lightness: kept under a
+    compressed lightness, they inflated the saturation of highlights.) The inverse at a
+    background without colour vision (``c = 0``) is grey.
 
     Attributes:
         cone_matrix: XYZ → cone responses (3×3, row-major); rows 1 and 3 are used.
@@ -189,9 +243,11 @@ class ConeOpponentSpace(AbstractContrastSpace):
         Lb, Sb = self._cones(*background)
         Yb = background[1]
         Lc, Sc = self._cones(X, Y, Z)
-        fy = _f_ratio(Y, Yb)
-        a = 500.0 * (_f_ratio(Lc, Lb) - fy)
-        b = 200.0 * (fy - _f_ratio(Sc, Sb))
+        # f(Y/Y_n) >= 4/29 for Y >= 0; a negative Y (out-of-gamut noise) is taken as 0 here
+        fy = _f_ratio(jnp.maximum(Y, 0.0), Yb)
+        c = mesopic_weight(Yb)
+        a = (500.0 * c) * (_f_ratio(Lc, Lb) / fy - 1.0)
+        b = (200.0 * c) * (1.0 - _f_ratio(Sc, Sb) / fy)
         return jnp.stack([fechner_brightness(Y, Yb), a, b], axis=-1)
 
     def inverse(self, coords, background):
@@ -200,8 +256,13 @@ class ConeOpponentSpace(AbstractContrastSpace):
         Yb = background[1]
         Y = fechner_luminance(B, Yb)
         fy = _f_ratio(Y, Yb)
-        Lc = _finv_scaled(fy + a / 500.0, Lb)
-        Sc = _finv_scaled(fy - b / 200.0, Sb)
+        c = mesopic_weight(Yb)
+        seen = c > 0  # without colour vision at the background: the grey of the same Y
+        safe_c = jnp.where(seen, c, 1.0)
+        sa = jnp.where(seen, a / (500.0 * safe_c), 0.0)
+        sb = jnp.where(seen, b / (200.0 * safe_c), 0.0)
+        Lc = _finv_scaled(fy * (1.0 + sa), Lb)
+        Sc = _finv_scaled(fy * (1.0 - sb), Sb)
         m = self.cone_matrix  # solve the L and S rows for X and Z given Y
         r1 = Lc - m[0][1] * Y
         r2 = Sc - m[2][1] * Y
@@ -221,9 +282,12 @@ BUDAK2005 = (
 class Budak2005(AbstractOperator):
     """Budak & Petrovichev 2005 perceptual colour-contrast reproduction (module docstring).
 
-    Coordinates in ``space`` relative to the scene background at ``adaptation``, inverse at
-    the display background ``display_max/2`` (the same chromaticity), divided by
-    ``display_max``: display-referred linear RGB, 1 at the display's maximum. Input in
+    Coordinates in ``space`` relative to the scene background at ``adaptation`` (brightness
+    lowered to the display background's where the scene's is higher), inverse at the display
+    background ``display_max/2`` (the same chromaticity), divided by ``display_max``:
+    display-referred linear RGB, 1 at the display's maximum; colours beyond it rolled off
+    towards white at their hue, so that no channel exceeds 1 (negative channels, from
+    colours outside the primaries' gamut, are left to the display encoding). Input in
     cd/m² (the Weber fractions depend on absolute luminance).
 
     Attributes:
@@ -317,15 +381,40 @@ class Budak2005(AbstractOperator):
         rX = jnp.where(good, quotient(jnp.where(good, bX, 1.0), safe_y), float(m[0].sum()))
         rZ = jnp.where(good, quotient(jnp.where(good, bZ, 1.0), safe_y), float(m[2].sum()))
         La = jnp.maximum(jnp.asarray(self.adaptation, dt), LMIN)
-        coords = self.space.forward((X, Y, Z), (rX * La, La, rZ * La))
         Lda = 0.5 * jnp.asarray(self.display_max, dt)
-        Xd, Yd, Zd = self.space.inverse(coords, (rX * Lda, Lda, rZ * Lda))
+        scene, display = (rX * La, La, rZ * La), (rX * Lda, Lda, rZ * Lda)
+        coords = self.space.forward((X, Y, Z), scene)
+        # a scene brighter than the display's adaptation shows its background at the
+        # display's (the paper's Eq. 2, background at half the display maximum); a dimmer
+        # one keeps its brightness above threshold, and looks as dim as it is
+        excess = self.space.forward(scene, scene)[0] - self.space.forward(display, display)[0]
+        coords = coords.at[..., 0].add(-jnp.maximum(excess, 0.0))
+        Xd, Yd, Zd = self.space.inverse(coords, display)
         out = jnp.stack(
             [Xd * minv[i, 0] + Yd * minv[i, 1] + Zd * minv[i, 2] for i in range(3)], axis=-1
         )
+        top = jnp.asarray(self.display_max, dt)
+        out = _roll_off_to_white(out / top, Yd / top)
         # no light in, no light out (the brightness scale starts at 1e-7 cd/m², which
         # would otherwise map a black pixel to a dim grey)
-        return jnp.where((Y > 0)[..., None], out / jnp.asarray(self.display_max, dt), 0.0)
+        return jnp.where((Y > 0)[..., None], out, 0.0)
+
+
+def _roll_off_to_white(rgb: Array, Y: Array) -> Array:
+    """Display RGB (white 1) with each colour beyond white moved towards the white of its
+    own luminance ``Y``, just far enough that its largest channel is 1 (luminance and hue,
+    the direction from grey, kept; saturation given up), and white where ``Y >= 1``.
+
+    A window brighter than the display then fades to white as its luminance rises, each
+    channel monotone, instead of being clipped per channel: that kept the channels below
+    1 and turned a blue window cyan and an orange one yellow before white.
+    """
+    Yc = Y[..., None]
+    over = (rgb > 1.0) & (Yc < 1.0)
+    # the largest s in [0, 1] with Y + s (c - Y) <= 1 for every channel c (c > 1 > Y)
+    room = jnp.where(over, rgb - Yc, 1.0)
+    s = jnp.min(jnp.where(over, (1.0 - Yc) / room, 1.0), axis=-1, keepdims=True)
+    return jnp.where(Yc < 1.0, Yc + s * (rgb - Yc), 1.0)
 
 
 __all__ = [

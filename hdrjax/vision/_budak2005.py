@@ -28,8 +28,9 @@ class Budak2005(eqx.Module):
     ``__call__`` takes linear RGB in cd/m² and returns gamma-encoded display values in
     [0, 1]: :class:`hdrjax.operators.Budak2005` (coordinates in ``space`` relative to the
     scene background at ``adaptation``, inverse at the display background
-    ``display_max/2``, division by ``display_max``), then
-    :func:`hdrjax.display.gamma_encode` (clip to [0, 1], power ``1/gamma``).
+    ``display_max/2``, division by ``display_max``, colours beyond the display's white
+    rolled off towards white at their hue), then :func:`hdrjax.display.gamma_encode` (clip
+    to [0, 1], power ``1/gamma``).
 
     Attributes:
         display_max: the display's maximum luminance, cd/m².

@@ -20,14 +20,13 @@ from .. import _check
 from .._colour import luminance
 from .._interp import lerp
 from .._photometry import (
-    BOT_MESOPIC,
     LMIN,
     SWNORM,
-    TOP_MESOPIC,
     check_rgb,
     chroma_key,
     headroom,
     log10_floor,
+    mesopic_weight,
     restore,
     sanitize,
     scotopic_unscaled,
@@ -59,17 +58,6 @@ def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     _check.real(L_a, "L_a")
     x = log10_floor(_check.as_float(L_a), LMIN)
     return 17.25 * jnp.arctan(1.4 * x + 0.35) + 25.72
-
-
-def mesopic_weight(L: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
-    """Share of colour vision at luminance ``L``: pcond3.c ``scotscan``'s ``incolor``.
-
-    ``c = (L - 5.62e-3)/(5.62 - 5.62e-3)`` clamped to [0, 1]: 0 (rods only) at or below
-    5.62e-3 cd/m², 1 (cones only) at or above 5.62 cd/m², linear in ``L`` between.
-    """
-    _check.real(L, "L")
-    L = _check.as_float(L)
-    return jnp.clip((L - BOT_MESOPIC) / (TOP_MESOPIC - BOT_MESOPIC), 0.0, 1.0)
 
 
 def colour_loss(

@@ -23,14 +23,23 @@ AP0 = (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767)
 
 
 @pytest.mark.usefixtures("x64")
-def test_grey_follows_the_fechner_power_law():
-    # a grey scene keeps its chromaticity; luminance maps as L_da (L/L_a)^(k_d/k_w) / L_dmax
-    L = np.array([0.02, 0.3, 2.0, 40.0])[None, :, None] * np.ones((1, 1, 3))
-    La, Ldmax = 1.5, 80.0
+@pytest.mark.parametrize("La", [1.5, 400.0])
+def test_grey_follows_the_fechner_power_law(La):
+    # a grey scene keeps its chromaticity. Its brightness in JNDs above the threshold ΔL,
+    # (L_a/ΔL(L_a)) ln(L/ΔL(L_a)), is kept: luminance maps as ΔL_d (L/ΔL_w)^(k_d/k_w),
+    # k = ΔL/L_a the Weber fractions; but a scene adapted above the display's L_da shows its
+    # adaptation level at L_da (the paper's background at half the display's maximum):
+    # L_da (L/L_a)^(k_d/k_w)
+    L = La * np.array([0.013, 0.2, 1.0, 1.5])[None, :, None] * np.ones((1, 1, 3))
+    Ldmax = 80.0
     out = np.asarray(hdrjax.tonemap(L, "budak2005", adaptation=La, display_max=Ldmax))
     Lda = Ldmax / 2
     k_w, k_d = np_tvi(La) / La, np_tvi(Lda) / Lda
-    expect = Lda * (L[..., 1] / La) ** (k_d / k_w) / Ldmax
+    if La < Lda:
+        expect = np_tvi(Lda) * (L[..., 1] / np_tvi(La)) ** (k_d / k_w) / Ldmax
+    else:
+        expect = Lda * (L[..., 1] / La) ** (k_d / k_w) / Ldmax
+    assert expect.max() < 1.0  # inside the display: no roll-off to white
     np.testing.assert_allclose(out[..., 1], expect, rtol=1e-9)
     np.testing.assert_allclose(out, out[..., :1].repeat(3, -1), rtol=1e-9)
 
@@ -63,19 +72,29 @@ def test_measures_the_visible_log_average_and_the_mean_colour():
 
 
 def test_the_files_primaries_reach_it_on_the_command_line(tmp_path, capsys):
+    """An ACES AP0 file is converted into the sRGB working space (colour-science's
+    RGB_to_RGB, CAT02) and mapped with sRGB's colour matrix, by tonemap and batch alike;
+    with --working-space ACES2065-1 (its own primaries) it is mapped with AP0's."""
+    import colour
+
     rgb = natural((8, 8), seed=5).astype(np.float32) * 30.0
     rgb[0, 0] = (60.0, 2.0, 2.0)  # saturated: the primaries matter most
     path = tmp_path / "ap0.exr"
     hio.write(path, LayeredImage(image=rgb, chromaticities=AP0))
+    ap0 = colour.RGB_Colourspace("AP0", np.reshape(AP0[:6], (3, 2)), AP0[6:])
+    srgb = colour.RGB_to_RGB(rgb.astype(np.float64), ap0, "sRGB").astype(np.float32)
+    want = np.asarray(Budak2005()(jnp.asarray(srgb)))
+    own = np.asarray(Budak2005(chromaticities=AP0)(jnp.asarray(rgb)))
+    assert np.max(np.abs(want - own)) > 1e-3
     out = tmp_path / "t.pfm"
     assert main(["tonemap", str(path), "-o", str(out), "--method", "budak2005"]) == 0
-    want = np.asarray(Budak2005(chromaticities=AP0)(jnp.asarray(rgb)))
-    rec709 = np.asarray(Budak2005()(jnp.asarray(rgb)))
-    assert np.max(np.abs(want - rec709)) > 1e-2
-    np.testing.assert_allclose(hio.read(out).image, want, rtol=1e-5, atol=2e-5)
+    np.testing.assert_allclose(hio.read(out).image, want, rtol=1e-4, atol=2e-5)
+    argv = ["--method", "budak2005", "--working-space", "ACES2065-1"]
+    exr = tmp_path / "t.exr"  # keeps the working space's primaries (PFM has none: sRGB)
+    assert main(["tonemap", str(path), "-o", str(exr), *argv]) == 0
+    np.testing.assert_allclose(hio.read(exr).native_rgb(), own, rtol=1e-4, atol=2e-5)
     capsys.readouterr()
-    # batch passes only the frames' luminance weights: it refuses rather than guess
     folder = tmp_path / "batch"
-    code = main(["batch", str(path), "-o", str(folder), "--method", "budak2005", "-q"])
-    err = capsys.readouterr().err
-    assert code != 0 and "primaries" in err
+    argv = ["--method", "budak2005", "--format", "pfm", "-q"]
+    assert main(["batch", str(path), "-o", str(folder), *argv]) == 0
+    np.testing.assert_allclose(hio.read(folder / "ap0.pfm").image, want, rtol=1e-4, atol=2e-5)

@@ -42,9 +42,10 @@ def test_coordinates_are_the_documented_formulas():
         d = 6 / 29
         return np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4 / 29)
 
-    B = 2.0 / np_tvi(2.0) * np.log(Y / 2.0)
-    a = 500 * (f(Lc / Lb) - f(Y / 2.0))
-    b = 200 * (f(Y / 2.0) - f(Sc / Sb))
+    B = 2.0 / np_tvi(2.0) * np.log(Y / np_tvi(2.0))
+    c = (2.0 - 5.62e-3) / (5.62 - 5.62e-3)  # pcond's mesopic weight of the background
+    a = 500 * c * (f(Lc / Lb) / f(Y / 2.0) - 1)
+    b = 200 * c * (1 - f(Sc / Sb) / f(Y / 2.0))
     got = np.asarray(
         hv.ConeOpponentSpace().forward(
             tuple(jnp.asarray(v) for v in (X, Y, Z)), tuple(jnp.asarray(v) for v in bg)
@@ -55,17 +56,19 @@ def test_coordinates_are_the_documented_formulas():
 
 @pytest.mark.usefixtures("x64")
 def test_grey_follows_the_fechner_power_law_and_stays_grey():
-    # a grey image (background chromaticity): luminance maps as L_da (L/L_a)^(k_d/k_w)
+    # a grey image (background chromaticity) dimmer than the display: brightness above
+    # threshold kept, luminance maps as ΔL_d (L/ΔL_w)^(k_d/k_w)
     L = np.array([0.01, 0.05, 0.2, 1.0])[None, :, None] * np.ones((1, 1, 3))
     La, Ldmax = 0.05, 100.0
     step = hv.Budak2005(display_max=Ldmax, adaptation=jnp.asarray(La))
     out = np.asarray(step.readapt(L))
     Lda = Ldmax / 2
     k_w, k_d = np_tvi(La) / La, np_tvi(Lda) / Lda
-    expect = Lda * (L[..., 1] / La) ** (k_d / k_w)
+    expect = np_tvi(Lda) * (L[..., 1] / np_tvi(La)) ** (k_d / k_w)
     np.testing.assert_allclose(out @ np.array([0.2126, 0.7152, 0.0722]), expect, rtol=1e-9)
     np.testing.assert_allclose(out, out[..., :1].repeat(3, -1), rtol=1e-9)
     assert k_d / k_w < 0.2  # a night scene is strongly compressed (few JNDs)
+    assert expect.max() < 0.06 * Ldmax  # and dim: its adaptation level below ΔL_d
 
 
 def test_night_is_compressed_day_is_not_and_output_is_display_range():

@@ -185,7 +185,7 @@ def test_glare_kernel_matches_psf_integral_away_from_centre():
 def test_fechner_brightness_and_inverse():
     L = np.array([1e-3, 0.1, 1.0, 10.0, 1e4])
     La = 2.0
-    expect = La / np_tvi(La) * np.log(L / La)
+    expect = La / np_tvi(La) * np.log(L / np_tvi(La))  # JNDs above the threshold
     np.testing.assert_allclose(hv.fechner_brightness(L, La), expect, rtol=RTOL64)
     np.testing.assert_allclose(hv.fechner_luminance(expect, La), L, rtol=RTOL64)
 

@@ -3,6 +3,7 @@
 import json
 
 import matplotlib
+import numpy as np
 
 from ..conftest import REPO
 
@@ -22,3 +23,7 @@ def test_vision_notebook_executes(monkeypatch):
     assert {"glare", "colour_loss", "contrast"} <= sel["dusk"] and "acuity" not in sel["dusk"]
     assert {"acuity", "glare", "colour_loss", "blue_shift", "contrast"} == sel["night"]
     assert ns["reports"]["starlight"].glare_variant == "scotopic"
+    # the last panel, Budak2005 in starlight, shows a night scene (it was 0.72, the
+    # adaptation level at half the display's maximum): see the notebook's text
+    starlit = np.asarray(ns["perceptual"])
+    assert ns["name"] == "starlight" and starlit.mean() < 0.3
