@@ -75,6 +75,16 @@ def as_float(x: Any) -> jax.Array:
     return x
 
 
+def rgb_pixels(x: Any, name: str = "rgb") -> jax.Array:
+    """Channels-last RGB ``(..., 3)`` as a float array (:func:`as_float`'s dtypes), for
+    functions of each pixel; one-line ``ValueError`` naming ``name`` otherwise."""
+    real(x, name)
+    x = jnp.asarray(x)
+    if x.ndim < 1 or x.shape[-1] != 3:
+        raise ValueError(f"{name}: expected channels-last RGB (..., 3), got shape {x.shape}")
+    return as_float(x)
+
+
 def form(channels: int | None = 3, ndim: int | None = None, min_ndim: int = 3) -> str:
     """The expected shape as the messages write it, e.g. ``(..., H, W, 3)``."""
     c = "C" if channels is None else str(channels)

@@ -252,12 +252,7 @@ def convert(
     value) saturate at ± that value (``saturate=False`` skips that check, for callers whose
     values are known to be small).
     """
-    _check.real(rgb, "rgb")
-    x = jnp.asarray(rgb)
-    if x.ndim < 1 or x.shape[-1] != 3:
-        raise ValueError(f"rgb: expected channels-last RGB (..., 3), got shape {x.shape}")
-    if not jnp.issubdtype(x.dtype, jnp.floating) or x.dtype == jnp.float16:
-        x = x.astype(jnp.result_type(float))
+    x = _check.rgb_pixels(rgb)
     m = jnp.asarray(matrix, x.dtype)
     if m.shape != (3, 3):
         raise ValueError(f"matrix: expected a 3×3 matrix, got shape {m.shape}")

@@ -259,6 +259,18 @@ def _bilinear(x):
     return hp.sample_bilinear(x, xs, jnp.asarray([0.0, h / 2, h - 1.0], dt))
 
 
+def _display_case(**kw):
+    """An encoding for a display (:func:`hdrjax.display.encode` with ``kw``): per pixel,
+    outputs in [0, 1]."""
+    return Case(
+        lambda x: hd.encode(x, **kw),
+        ("hdrjax.display.encode",),
+        batch=True,
+        out_range=(0, 1),
+        accepts=EMPTY_PER_PIXEL,
+    )
+
+
 def _module_case(make, **kw):
     """A Module applied to the image; ``make(x)`` builds it for the image's shape."""
     return Case(fn=lambda x: make(x)(x), module=make, **kw)
@@ -320,20 +332,8 @@ CASES: dict[str, Case] = {
     "encode_gamma": Case(
         lambda x: hd.encode(x, "gamma"), ("hdrjax.display.encode",), batch=True, out_range=(0, 1)
     ),
-    "encode_p3": Case(
-        lambda x: hd.encode(x, display="Display P3"),
-        ("hdrjax.display.encode",),
-        batch=True,
-        out_range=(0, 1),
-        accepts=EMPTY_PER_PIXEL,
-    ),
-    "encode_pq": Case(
-        lambda x: hd.encode(x, display="PQ", space="ACEScg", gamut="compress"),
-        ("hdrjax.display.encode",),
-        batch=True,
-        out_range=(0, 1),
-        accepts=EMPTY_PER_PIXEL,
-    ),
+    "encode_p3": _display_case(display="Display P3"),
+    "encode_pq": _display_case(display="PQ", space="ACEScg", gamut="compress"),
     "encode_pq_scene": Case(
         # the source peak is the image's largest finite value: a statistic
         lambda x: hd.encode(x, display="PQ", scene_referred=True),
@@ -341,13 +341,8 @@ CASES: dict[str, Case] = {
         reach="stat",
         out_range=(0, 1),
     ),
-    "encode_hlg": Case(
-        lambda x: hd.encode(x, display="HLG"),
-        ("hdrjax.display.encode",),
-        batch=True,
-        out_range=(0, 1),
-        accepts=EMPTY_PER_PIXEL,
-    ),
+    "encode_bt2020": _display_case(display="ITU-R BT.2020", space="CIE XYZ"),
+    "encode_hlg": _display_case(display="HLG"),
     "gamut_map": Case(
         lambda x: hd.gamut_map(x - 0.25 * jnp.mean(x, axis=-1, keepdims=True)),
         ("hdrjax.display.gamut_map",),
