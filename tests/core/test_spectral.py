@@ -285,3 +285,31 @@ def test_spectral_kind_from_channel_names():
     assert spectral_kind(("400,000000nm", "410,000000nm")) == "emissive"
     assert spectral_kind(("T.400,000000nm", "410,000000nm")) == "emissive"
     assert spectral_kind(()) == "emissive"
+
+
+def test_spectral_files_work_where_rgb_files_do(tmp_path, capsys):
+    """A small emissive spectral EXR through tonemap, falsecolor, info and batch: each
+    reads it as XYZ converted to sRGB (tonemap's linear output is that, halved)."""
+    from hdrjax.cli import main
+
+    rng = np.random.default_rng(3)
+    radiance = rng.uniform(0.0005, 0.002, (6, 8, 31)).astype(np.float32)
+    img = LayeredImage(image=radiance, layers={"wavelengths": WL31}, quantity="radiance")
+    path = hio.write(tmp_path / "spec.exr", img)
+    xyz = spectral_to_xyz(radiance, WL31)
+    srgb = np.asarray(convert_to(xyz, "CIE XYZ", "sRGB"))
+    out = tmp_path / "t.exr"
+    argv = ["--method", "linear", "--set", f"L_max={2 * float(np.asarray(xyz)[..., 1].max())}"]
+    assert main(["tonemap", str(path), "-o", str(out), *argv]) == 0
+    assert "spectral: 31 bands, 400-700 nm, integrated to CIE XYZ" in capsys.readouterr().out
+    y_max = float(np.asarray(xyz)[..., 1].max())
+    np.testing.assert_allclose(hio.read(out).image, srgb / (2 * y_max), rtol=1e-4, atol=1e-7)
+    assert main(["falsecolor", str(path), "-o", str(tmp_path / "f.png")]) == 0
+    capsys.readouterr()
+    # info's description of the file (its statistics are the RGB path's, tested there)
+    from hdrjax.cli._cmd_tonemap import describe_conversion
+
+    assert describe_conversion(hio.read(path)).startswith("spectral: 31 bands, 400-700 nm")
+    folder = tmp_path / "batch"
+    assert main(["batch", str(path), "-o", str(folder), *argv, "--format", "exr", "-q"]) == 0
+    np.testing.assert_allclose(hio.read(folder / "spec.exr").image, hio.read(out).image, rtol=1e-5)
