@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
     img, rgb = load_rgb(args.input)
     t_read = time.perf_counter() - t0
     projection = _projection(args, img, rgb.shape)
-    weights = img.luminance_weights
+    weights = img.luminance_weights_in()  # the file's own luminance, from sRGB pixels
 
     import jax
 
