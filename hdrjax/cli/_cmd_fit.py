@@ -265,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import optimistix as optx
 
-    from .. import fit as hfit
+    from .. import fit as hfit, spaces
 
     space, cat = colour_settings(args)
     weights = img.luminance_weights_in(space, cat=cat)
@@ -321,7 +321,8 @@ def run(args: argparse.Namespace) -> int:
             "targets (full resolution): "
             + ", ".join(f"{lab}: {float(s):.4g}" for (lab, _), s in zip(labels, full, strict=True))
         )
-    write_output(args, encode_output(args, display))
+    converted = not spaces.is_identity(img.conversion(space, cat=cat))
+    write_output(args, encode_output(args, display, converted))
     print(f"wrote: {args.output}")
     if res.result != optx.RESULTS.successful:
         return EXIT_NOT_CONVERGED

@@ -219,11 +219,13 @@ def check_output(args: argparse.Namespace) -> str:
     return ext
 
 
-def encode_output(args: argparse.Namespace, display, converted: bool = True):
+def encode_output(args: argparse.Namespace, display, converted: bool = False):
     """Display-referred linear RGB in the working space → the array written to
     ``args.output`` (NumPy): encoded for the display for .png/.jpg/.tif, linear float for
-    .exr/.hdr/.pfm. ``converted=False`` says the pixels were sRGB to begin with (no colour
-    outside the gamut to map: an sRGB display only clips and encodes them)."""
+    .exr/.hdr/.pfm. ``converted`` says the file was converted into the working space:
+    colours outside an sRGB display's gamut then come from the file's wider primaries and
+    the gamut method maps them; pixels that were sRGB to begin with are clipped and
+    encoded as they are."""
     import jax
     import numpy as np
 
