@@ -486,16 +486,6 @@ def with_file_weights(op, img, args: argparse.Namespace | None = None):
     return op.for_primaries(weights, None if space.is_rec709 else space.chromaticities)
 
 
-def with_weights(op, weights):
-    """The operator with these luminance weights; per-channel operators (no ``weights``
-    parameter) as they are."""
-    import dataclasses
-
-    if "weights" in {f.name for f in dataclasses.fields(op)}:
-        op = dataclasses.replace(op, weights=weights)
-    return op
-
-
 def eqx_jit_measure(op, rgb, matrix=None):
     """``op.measure(rgb)`` compiled (statistics of large images are slow eagerly), of
     ``rgb`` converted by ``matrix`` (:func:`load_native`): see
