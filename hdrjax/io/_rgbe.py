@@ -19,9 +19,10 @@ Format (Ward, "Real pixels", Graphics Gems II; Radiance ``color.c``/``header.c``
   ``128+n, byte`` and literals ``n, n bytes``), or "old" RLE (pixel ``1 1 1 n`` repeats the
   previous pixel ``n << 8k`` times for the k-th repeat in a row).
 
-RLE decoding runs all candidate scanlines in parallel (one NumPy step per run header of
-the longest scanline) and then expands the runs with a single ``np.repeat``; there is no
-Python loop per pixel or per run.
+RLE decoding walks the run headers of every candidate scanline in lock-step (one Python
+iteration, of three NumPy calls, per run header of the longest scanline), then expands the
+runs with one ``np.repeat`` per block of scanlines and converts each block to float while
+it is in cache; there is no Python loop per pixel or per run.
 """
 
 import math
@@ -38,8 +39,12 @@ MAX_DIM = 1 << 20
 """Largest width or height accepted from a header."""
 
 _HEADER_LIMIT = 1 << 16
-_BLOCK_BYTES = 1 << 21  # input bytes expanded per step (cache-sized temporaries)
-_HEAD = np.arange(256, dtype=np.int64)  # RLE header byte values (see _rle_plan)
+_BLOCK_BYTES = 1 << 17  # decoded bytes per block (np.repeat and float conversion in cache)
+_WALK_STEPS = 128  # most run headers walked between looks for finished walks (_rle_walk)
+_HEAD = np.arange(256)  # RLE header byte values
+_MAG = np.where(_HEAD <= 128, _HEAD, _HEAD - 128)  # pixels a header stands for (0: invalid)
+_ADV = np.where(_HEAD > 128, 2, 1 + _HEAD).astype(np.intp)  # bytes from a header to the next
+_REP = np.where(_HEAD > 128, _HEAD - 128, 1).astype(np.int8)  # copies of the byte after it
 _RES_RE = re.compile(rb"^([-+])([XY]) +(\d+) +([-+])([XY]) +(\d+)\s*$")
 
 _F32_MAX = float(np.finfo(np.float32).max)
@@ -165,103 +170,167 @@ def parse_header(data: bytes | memoryview, name: str) -> tuple[dict, int]:
     return info, nl + 1
 
 
+def _rle_candidates(buf: np.ndarray, length: int) -> np.ndarray:
+    """Byte offsets of every ``2 2 W_hi W_lo`` pattern (``buf`` holds at least 4 bytes)."""
+    c = np.flatnonzero(buf[:-3] == 2)
+    return c[(buf[c + 1] == 2) & (buf[c + 2] == length >> 8) & (buf[c + 3] == length & 0xFF)]
+
+
+def _rle_walk(
+    buf: np.ndarray, cand: np.ndarray, length: int, budget: int, name: str
+) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, ...]]]:
+    """Walk the run headers after every candidate scanline header, all in lock-step.
+
+    A walk ends once it covers ``4 · length`` pixels, and is exact when it lands there with
+    its last byte inside ``buf``. A step is three NumPy calls on arrays of one entry per
+    walk (read the header bytes, look up how far each jumps, add), so the Python loop runs
+    as often as the longest scanline has run headers. Pixel counts are summed, and finished
+    walks leave the arrays, once per block of ``length / 8`` steps (16 to ``_WALK_STEPS``):
+    the maps in data/ have about ``length / 4`` run headers per scanline, and on them this
+    block decoded fastest (the block-wise calls cost more than the steps a walk takes past
+    its end before the block ends, which are dropped). Reads past the data see its last
+    byte.
+
+    Raises:
+        ReadError: the walks together take more than ``budget`` steps.
+
+    Returns:
+        ``(ends, whole, records)``: the offset after each candidate's scanline (-1 where
+        its walk is not exact); whether its pixel counts land on the component boundaries
+        (``length``, ``2 · length``, ``3 · length``: no run or literal crosses one); and
+        per block of steps ``(ids, offsets, headers, used, decoded)``: the candidates
+        walked, their run-header offsets ``(steps + 1, walks)`` (the last row is where the
+        next block starts) and bytes ``(steps, walks)``, how many of the block's steps
+        belong to each walk, and the pixels each had decoded before the block.
+    """
+    n, target, k = buf.size, 4 * length, cand.size
+    block = min(max(16, length // 8), _WALK_STEPS)
+    mag = _MAG.copy()
+    mag[0] = target + 1  # header byte 0 is invalid: its walk ends at once, not exact
+    edge = np.zeros(target + 1, bool)
+    edge[[length, 2 * length, 3 * length]] = True
+    ends = np.full(k, -1, np.int64)
+    hits = np.zeros(k, np.int64)
+    ids = np.arange(k)
+    p = cand + 4
+    f = np.zeros(k, np.int64)
+    records = []
+    while ids.size:
+        a = ids.size
+        steps = min(block, budget // a + 1)  # no more work than the budget allows
+        pos = np.empty((steps + 1, a), np.intp)
+        head = np.empty((steps, a), np.uint8)
+        pos[0] = p
+        rows, heads = list(pos), list(head)
+        for i in range(steps):
+            h = heads[i]
+            buf.take(rows[i], mode="clip", out=h)
+            np.add(rows[i], _ADV.take(h), out=rows[i + 1])
+        # Pixels decoded after each step, walk by walk (a cumsum along the steps axis is
+        # slow in NumPy): take() transposes to (walks, steps), one flat cumsum, and each
+        # row is shifted to start from its walk's count so far.
+        after = mag.take(head.T)
+        np.cumsum(after.ravel(), out=after.ravel())
+        shift = f.copy()
+        shift[1:] -= after[:-1, -1]
+        after += shift[:, None]
+        over = after >= target
+        fin = over[:, -1]
+        col = np.flatnonzero(fin)
+        used = np.full(a, steps)
+        stop = np.argmax(over[col], axis=1) + 1
+        used[col] = stop
+        budget -= int(used.sum())
+        if budget < 0:
+            raise ReadError(f"{name}: corrupt Radiance run-length data (runaway decoding)")
+        # component boundaries reached exactly (counts past a walk's end are all >= target)
+        on_edge = np.flatnonzero(edge.take(after, mode="clip")) // steps
+        hits[ids] += np.bincount(on_edge, minlength=a)
+        records.append((ids, pos, head, used, f))
+        if col.size:
+            end = pos[stop, col]
+            exact = (after[col, stop - 1] == target) & (end <= n)
+            ends[ids[col[exact]]] = end[exact]
+            keep = ~fin
+            ids, p, f = ids[keep], pos[-1, keep], after[keep, -1]
+        else:
+            p, f = pos[-1], after[:, -1]
+    return ends, hits == 3, records
+
+
+def _rle_chain(cand: np.ndarray, ends: np.ndarray, nscan: int, name: str) -> np.ndarray:
+    """Indices into ``cand`` of the real scanlines: the chain of exact walks from byte 0."""
+    k = cand.size
+    if k >= nscan and ends[nscan - 1] >= 0 and np.array_equal(ends[: nscan - 1], cand[1:nscan]):
+        return np.arange(nscan)  # the usual file: the first nscan candidates
+    nxt = np.minimum(np.searchsorted(cand, ends), k - 1)
+    nxt = np.where((ends >= 0) & (cand[nxt] == ends), nxt, -1).tolist()
+    ok = (ends >= 0).tolist()
+    chain = [0]
+    for row in range(nscan):
+        i = chain[row]
+        if i < 0 or not ok[i]:
+            raise ReadError(
+                f"{name}: corrupt or truncated Radiance run-length data at scanline {row}"
+            )
+        chain.append(nxt[i])
+    return np.array(chain[:nscan])
+
+
+def _straddle_row(records: list, on_chain: np.ndarray, starts: np.ndarray, length: int) -> int:
+    """The scanline of the first run or literal, in walk order (step by step, then scanline
+    by scanline), that crosses a component boundary; called when there is one."""
+    for ids, pos, head, used, f in records:
+        cnt = _MAG.take(head)
+        before = np.cumsum(cnt, axis=0) - cnt + f
+        bad = before % length + cnt > length
+        bad &= (np.arange(len(head))[:, None] < used) & on_chain[ids]
+        if bad.any():
+            step, col = np.argwhere(bad)[0]
+            return max(int(np.searchsorted(starts, pos[step, col])) - 1, 0)
+    raise AssertionError("no run or literal crosses a component boundary")
+
+
 def _rle_plan(buf: np.ndarray, nscan: int, length: int, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Parse ``nscan`` new-style RLE scanlines of ``length`` pixels.
 
     Every position that looks like a scanline header (``2 2 W_hi W_lo``) is decoded in
-    parallel, one run header per NumPy step; the real scanlines are then the chain that
-    starts at the first byte.
+    parallel (:func:`_rle_walk`); the real scanlines are then the chain that starts at the
+    first byte.
 
     Returns:
         ``(starts, rep)``: the byte offset of each scanline (and the end), and how often
         each byte appears in the decoded planes (``np.repeat`` counts).
     """
-    n = buf.size
-    hi, lo = length >> 8, length & 0xFF
-    if n < 4:
+    if buf.size < 4:
         raise ReadError(f"{name}: truncated Radiance pixel data")
-    # the 4-byte pattern at each of the 4 alignments, compared as uint32 words
-    pattern = np.frombuffer(bytes([2, 2, hi, lo]), np.uint32)[0]
-    found = []
-    for a in range(min(4, n - 3)):
-        words = np.frombuffer(buf.data, np.uint32, count=(n - a) // 4, offset=a)
-        found.append(np.flatnonzero(words == pattern) * 4 + a)
-    cand = np.sort(np.concatenate(found))
+    cand = _rle_candidates(buf, length)
     if cand.size == 0 or cand[0] != 0:
         raise ReadError(f"{name}: corrupt Radiance run-length data at scanline 0")
-    k = cand.size
-    target = 4 * length
-    # One run header per step for every candidate at once; the per-step work is kept to a
-    # few NumPy calls (small files are dominated by their count). Header byte h stands for
-    # MAG[h] pixels and the next header is ADV[h] bytes on; h = 0 is invalid and gets a
-    # count past the end of any scanline, so its walk ends at once as not exact. Positions
-    # past the data read its last byte; such walks end past the data and are refused below.
-    mag = np.where(_HEAD < 128 + 1, _HEAD, _HEAD - 128)
-    mag[0] = target + 1
-    adv = np.where(_HEAD > 128, 2, 1 + _HEAD)
-    last = n - 1
-    ids = np.arange(k)
-    p = cand + 4
-    f = np.zeros(k, np.int64)  # pixels decoded so far in this scanline (4 components)
-    ends = np.full(k, -1, np.int64)
-    rec_p: list[np.ndarray] = []
-    rec_f: list[np.ndarray] = []
-    rec_c: list[np.ndarray] = []
     budget = 16 * nscan * length + (1 << 20)  # work bound: linear in the image size
-    while ids.size:
-        budget -= ids.size
-        if budget < 0:
-            raise ReadError(f"{name}: corrupt Radiance run-length data (runaway decoding)")
-        h = buf[np.minimum(p, last)]
-        rec_p.append(p)
-        rec_f.append(f)
-        rec_c.append(ids)
-        f = f + mag[h]
-        p = p + adv[h]
-        done = f >= target
-        if done.any():
-            exact = done & (f == target) & (p <= n)
-            ends[ids[exact]] = p[exact]
-            keep = ~done
-            ids, p, f = ids[keep], p[keep], f[keep]
-    # the chain of real scanlines (one Python step per scanline)
-    idx_of = dict(zip(cand.tolist(), range(k), strict=True))
-    chain = np.empty(nscan, np.int64)
-    starts = np.empty(nscan + 1, np.int64)
-    at = 0
-    for row in range(nscan):
-        i = idx_of.get(at)
-        if i is None or ends[i] < 0:
-            raise ReadError(
-                f"{name}: corrupt or truncated Radiance run-length data at scanline {row}"
-            )
-        chain[row] = i
-        starts[row] = at
-        at = int(ends[i])
-    starts[nscan] = at
-    all_p = np.concatenate(rec_p)
-    all_f = np.concatenate(rec_f)
-    if k > nscan:  # drop the records of false candidates
-        on_chain = np.zeros(k, bool)
-        on_chain[chain] = True
-        keep = on_chain[np.concatenate(rec_c)]
-        all_p, all_f = all_p[keep], all_f[keep]
-    heads_b = buf[all_p].astype(np.int64)
-    cnt = mag[heads_b]
-    # a run or literal must not straddle the end of a component (a multiple of length)
-    if np.any(all_f % length + cnt > length):
-        row = int(np.searchsorted(starts, all_p[np.argmax(all_f % length + cnt > length)]) - 1)
-        raise ReadError(f"{name}: corrupt Radiance run-length data at scanline {max(row, 0)}")
-    all_n = np.where(heads_b > 128, -cnt, cnt)
+    ends, whole, records = _rle_walk(buf, cand, length, budget, name)
+    chain = _rle_chain(cand, ends, nscan, name)
+    starts = np.append(cand[chain], ends[chain[-1]])
+    on_chain = np.zeros(cand.size, bool)
+    on_chain[chain] = True
+    if not whole[chain].all():
+        row = _straddle_row(records, on_chain, starts, length)
+        raise ReadError(f"{name}: corrupt Radiance run-length data at scanline {row}")
     # How often each byte appears in the output: literal data bytes once (the default),
-    # run headers and scanline headers never, run value bytes `count` times.
-    rep = np.ones(at, np.int8)
-    rep[all_p] = 0
-    heads = starts[:-1]
+    # run headers and scanline headers never, run value bytes `count` times. Steps of
+    # walks that are not scanlines, or past a scanline's end, are left out.
+    rep = np.ones(int(starts[-1]), np.int8)
+    after_head = rep[1:]
+    for ids, pos, head, used, _ in records:
+        at = pos[:-1]
+        lim = np.where(on_chain[ids], used, 0)
+        if lim.min() < len(head):
+            mine = np.arange(len(head))[:, None] < lim
+            at, head = at[mine], head[mine]
+        rep[at] = 0
+        after_head[at] = _REP.take(head)
     for d in range(4):
-        rep[heads + d] = 0
-    run = all_n < 0
-    rep[all_p[run] + 1] = (-all_n[run]).astype(np.int8)
+        rep[starts[:-1] + d] = 0
     return starts, rep
 
 
@@ -270,12 +339,11 @@ def _rle_blocks(
 ) -> Iterator[tuple[int, int, np.ndarray]]:
     """Decoded RLE scanlines in blocks: ``(row0, row1, planes (rows, 4, length))``.
 
-    Blocks of about ``_BLOCK_BYTES`` input bytes keep the temporaries in cache (np.repeat
+    Blocks of about ``_BLOCK_BYTES`` decoded bytes keep the temporaries in cache (np.repeat
     makes intp counts) and let the caller convert each block while it is hot.
     """
     starts, rep = _rle_plan(buf, nscan, length, name)
-    per_row = max(1, int(starts[-1]) // nscan)
-    rows = max(1, _BLOCK_BYTES // per_row)
+    rows = max(1, _BLOCK_BYTES // (4 * length))
     for r0 in range(0, nscan, rows):
         r1 = min(nscan, r0 + rows)
         s, e = int(starts[r0]), int(starts[r1])
