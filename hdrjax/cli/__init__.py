@@ -2,8 +2,10 @@
 
 Subcommands live in ``hdrjax/cli/_cmd_<name>.py``; each module defines
 ``register(subparsers)`` that adds its parser and sets ``func`` (a callable taking the parsed
-namespace and returning an exit code). Errors are one line naming the file or argument and
-the problem: exit code 2 for usage errors, 1 for bad data.
+namespace and returning an exit code). A module imports what ``func`` needs inside it, so
+building the parsers imports no JAX (what they show of the operators comes from
+:mod:`._registry`). Errors are one line naming the file or argument and the problem: exit
+code 2 for usage errors, 1 for bad data.
 
 Before parsing, the modules listed in the environment variable ``HDRJAX_PLUGINS``
 (comma-separated module names or ``.py`` file paths) are imported, so the operators they
@@ -14,7 +16,6 @@ import argparse
 import contextlib
 import importlib
 import os
-import pkgutil
 import sys
 
 from ._common import CLIError, DataError, UsageError
@@ -37,10 +38,21 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers.required = True
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_cmd_"):
-            importlib.import_module(f"{__name__}.{info.name}").register(subparsers)
+    for name in _command_modules():
+        importlib.import_module(f"{__name__}.{name}").register(subparsers)
     return parser
+
+
+def _command_modules() -> list[str]:
+    """The ``_cmd_*`` modules of this package, sorted: a directory listing (pkgutil's module
+    scan imports inspect, which start-up does not otherwise need)."""
+    names = set()
+    for folder in __path__:
+        for entry in os.listdir(folder):
+            stem, ext = os.path.splitext(entry)
+            if stem.startswith("_cmd_") and ext == ".py":
+                names.add(stem)
+    return sorted(names)
 
 
 def _enable_compilation_cache() -> None:
@@ -113,7 +125,8 @@ def main(argv: list[str] | None = None) -> int:
         return e.exit_code
     parser = build_parser()
     args = parser.parse_args(argv)
-    _enable_compilation_cache()
+    if getattr(args, "uses_jax", True):  # not for `operators`, which compiles nothing
+        _enable_compilation_cache()
     if getattr(args, "output", None) == "-":
         # the image goes to standard output: everything printed goes to standard error
         args.stdout = sys.stdout.buffer

@@ -8,7 +8,6 @@ errors.
 import argparse
 import sys
 
-from ..io._display import DEFAULT_COMPRESSION
 from ._cmd_tonemap import (
     SHORTCUT_OPTIONS,
     add_colour_arguments,
@@ -17,6 +16,7 @@ from ._cmd_tonemap import (
     build_operator,
 )
 from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
+from ._registry import constant
 
 
 def _positive_int(text: str) -> int:
@@ -100,7 +100,7 @@ def register(subparsers) -> None:
         "--compression",
         type=int,
         choices=range(10),
-        default=DEFAULT_COMPRESSION,
+        default=constant("hdrjax.io.DEFAULT_COMPRESSION"),
         metavar="0-9",
         help="PNG/TIFF zlib level (default 1, OpenCV's; 6 is ~8x slower for ~1%% smaller PNGs)",
     )

@@ -5,8 +5,8 @@ import json
 import os
 import time
 
-from ..io._atomic import atomic_path, atomic_write_bytes
 from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
+from ._registry import constant
 
 OVERLAY_EXT = (".png", ".jpg", ".jpeg", ".pdf", ".svg")
 
@@ -32,14 +32,10 @@ def _non_negative_float(text: str) -> float:
 
 
 def register(subparsers) -> None:
-    from ..lights import (
-        CONVENTIONS,
-        DEFAULT_BLUR,
-        DEFAULT_MAX_LIGHTS,
-        DEFAULT_MAX_RADIUS,
-        DEFAULT_WIDTH,
-    )
-
+    # hdrjax.lights' defaults, recorded (importing hdrjax.lights imports JAX)
+    width, blur = constant("hdrjax.lights.DEFAULT_WIDTH"), constant("hdrjax.lights.DEFAULT_BLUR")
+    max_radius = constant("hdrjax.lights.DEFAULT_MAX_RADIUS")
+    max_lights = constant("hdrjax.lights.DEFAULT_MAX_LIGHTS")
     p = subparsers.add_parser(
         "lights",
         help="find the light sources of an environment map (or a plain image)",
@@ -67,8 +63,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--width",
         type=_positive_int,
-        default=DEFAULT_WIDTH,
-        help=f"working width in pixels (default {DEFAULT_WIDTH})",
+        default=width,
+        help=f"working width in pixels (default {width})",
     )
     p.add_argument(
         "--samples",
@@ -83,20 +79,20 @@ def register(subparsers) -> None:
     p.add_argument(
         "--blur",
         type=_non_negative_float,
-        default=DEFAULT_BLUR,
-        help=f"Gaussian sigma in working pixels (default {DEFAULT_BLUR:g})",
+        default=blur,
+        help=f"Gaussian sigma in working pixels (default {blur:g})",
     )
     p.add_argument(
         "--max-radius",
         type=positive_float,
-        help=f"largest light radius: degrees (default {DEFAULT_MAX_RADIUS:g}), or "
+        help=f"largest light radius: degrees (default {max_radius:g}), or "
         "working pixels for a plain image",
     )
     p.add_argument(
         "--max-lights",
         type=_positive_int,
-        default=DEFAULT_MAX_LIGHTS,
-        help=f"most lights reported (default {DEFAULT_MAX_LIGHTS})",
+        default=max_lights,
+        help=f"most lights reported (default {max_lights})",
     )
     p.add_argument(
         "--n-lights",
@@ -106,7 +102,7 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--convention",
-        choices=CONVENTIONS,
+        choices=constant("hdrjax.lights.CONVENTIONS"),
         default="hdrjax",
         help="direction convention for the JSON and the listing (default hdrjax: "
         "Y-up, ahead -Z, right +X)",
@@ -147,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
     import jax
 
     from .. import lights as hl
+    from ..io._atomic import atomic_path, atomic_write_bytes
 
     t0 = time.perf_counter()
     try:

@@ -1,14 +1,16 @@
 """``hdrjax operators [NAME]``: the registered operators, or one operator's parameters.
 
 Everything printed is what the operators declare (:func:`hdrjax.operators.parameter_info`
-and their class attributes), the way pfstmo's manual pages describe its operators.
+and their class attributes), the way pfstmo's manual pages describe its operators, read
+through :mod:`._registry` (the recorded manifest: no JAX import, unless plug-ins are
+present).
 """
 
 import argparse
-import inspect
 import textwrap
 
 from ._common import UsageError
+from ._registry import OperatorEntry, find, operators
 
 
 def register(subparsers) -> None:
@@ -21,83 +23,59 @@ def register(subparsers) -> None:
         "are estimated from the image.",
     )
     p.add_argument("name", nargs="?", help="an operator name (case and _/- insensitive)")
-    p.set_defaults(func=run)
-
-
-def summary(cls) -> str:
-    """The first paragraph of an operator's docstring, on one line, without markup."""
-    doc = inspect.cleandoc(cls.__doc__ or "").split("\n\n")[0]
-    return " ".join(doc.replace("``", "").split())
+    # nothing to compile: main leaves JAX's compilation cache (and JAX) alone
+    p.set_defaults(func=run, uses_jax=False)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..operators import get_operator, operator_names
-
     if args.name is None:
-        names = operator_names()
-        width = max(len(n) for n in names) + 2
-        for name in names:
-            cls = get_operator(name)
-            print(_wrap(summary(cls), name.ljust(width), width))
-            if cls.reference:
-                print(_wrap(cls.reference, " " * width, width + 2))
+        entries = operators()
+        width = max(len(op.name) for op in entries) + 2
+        for op in entries:
+            print(_wrap(op.summary, op.name.ljust(width), width))
+            if op.reference:
+                print(_wrap(op.reference, " " * width, width + 2))
         print("\n`hdrjax operators NAME` lists an operator's parameters.")
         return 0
     try:
-        cls = get_operator(args.name)
+        op = find(args.name)
     except ValueError as e:
         raise UsageError(str(e)) from None
-    print(describe_operator(cls))
+    print(describe_operator(op))
     return 0
 
 
-def describe_operator(cls) -> str:
+def describe_operator(op: OperatorEntry) -> str:
     """An operator's manual page: description, reference, properties, parameters."""
-    from ..operators import parameter_info
-
-    lines = [_wrap(summary(cls), f"{cls.name}: ", 4)]
-    if cls.reference:
-        lines.append(_wrap(cls.reference, "reference: ", 4))
+    lines = [_wrap(op.summary, f"{op.name}: ", 4)]
+    if op.reference:
+        lines.append(_wrap(op.reference, "reference: ", 4))
     maps = (
         "each channel (R, G, B)"
-        if cls.per_channel
+        if op.per_channel
         else "luminance, with the weights of the file's primaries"
     )
     lines.append(f"maps: {maps}")
-    lines.append(f"scale invariant: {'yes' if cls.scale_invariant else 'no'}")
-    fitted = ", ".join(cls.default_fit_params) or "none (give --param)"
+    lines.append(f"scale invariant: {'yes' if op.scale_invariant else 'no'}")
+    fitted = ", ".join(op.default_fit_params) or "none (give --param)"
     lines.append(f"fitted by default (hdrjax fit): {fitted}")
-    infos = parameter_info(cls)
-    if not infos:
+    if not op.parameters:
         lines.append("parameters: none")
         return "\n".join(lines)
     lines.append("parameters (hdrjax tonemap --set PARAM=VALUE):")
-    for info in infos:
+    for info in op.parameters:
         unit = f" [{info.unit}]" if info.unit else ""
         lines.append(f"  {info.name}{unit}")
         lines.append(_wrap(info.help, " " * 6, 6))
-        facts = [f"default: {_default(info)}"]
-        if info.range_text():
-            facts.append(("choices: " if info.choices else "range: ") + info.range_text())
+        facts = [f"default: {info.default}"]
+        if info.range_text:
+            facts.append(("choices: " if info.choices else "range: ") + info.range_text)
         if info.estimated:
             facts.append(f"estimated from the image (over frames: {info.pooling})")
         if info.static:
             facts.append("setting (not differentiable)")
         lines.append(_wrap("; ".join(facts), " " * 6, 6))
     return "\n".join(lines)
-
-
-def _default(info) -> str:
-    if info.required:
-        return "required"
-    v = info.default
-    if v is None:
-        return "estimated" if info.estimated else "none"
-    if isinstance(v, tuple):
-        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
-    if isinstance(v, float):
-        return f"{v:g}"
-    return str(v)
 
 
 def _wrap(text: str, first: str, indent: int) -> str:

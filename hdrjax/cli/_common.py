@@ -4,7 +4,6 @@ import argparse
 import contextlib
 import os
 import sys
-import tempfile
 from collections.abc import Iterator
 
 LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -130,6 +129,8 @@ def output_file(args: argparse.Namespace) -> Iterator[str]:
     if args.output != "-":
         yield args.output
         return
+    import tempfile
+
     with tempfile.TemporaryDirectory(prefix="hdrjax-stdout-") as d:
         path = os.path.join(d, "stdout" + output_ext(args))
         yield path
