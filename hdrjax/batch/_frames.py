@@ -13,11 +13,20 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+import jax
 import numpy as np
 
 from .. import io as hio
 from ._pipeline import Pipeline, frame_is_clean, render_batch
-from ._sequence import measure_batch, merge_statistics, stack_operators
+from ._sequence import (
+    estimated_values,
+    host_statistics,
+    measure_batch,
+    merge_statistics,
+    stack_operators,
+    statistics_settings,
+    with_values,
+)
 
 
 class FrameError(ValueError):
@@ -75,10 +84,53 @@ def _padded(frames: Sequence[np.ndarray], batch_size: int) -> np.ndarray:
     return np.stack(frames)
 
 
-def group_key(rgb: np.ndarray, source: tuple | None) -> tuple:
+def group_key(rgb: np.ndarray, source: tuple | None, pipeline: Pipeline | None = None) -> tuple:
     """Frames that can share one compiled batch: same shape, primaries (:func:`read_frame`)
-    and cleanliness (all pixels finite, :func:`~hdrjax.batch.frame_is_clean`)."""
+    and cleanliness (all pixels finite, :func:`~hdrjax.batch.frame_is_clean`). Frames of a
+    :func:`chunked` pipeline group by primaries alone: each goes through the same programs
+    whatever its size."""
+    if pipeline is not None and chunked(pipeline):
+        return (None, source, None)
     return (rgb.shape, source, frame_is_clean(rgb))
+
+
+def chunked(pipeline: Pipeline) -> bool:
+    """Whether the pipeline maps frames in fixed-shape chunks of pixels
+    (:func:`hdrjax.tile.tonemap_chunked`: one compiled program for every frame size): no
+    steps before the operator, and a pointwise operator whose estimates merge."""
+    from ..tile import chunkable
+
+    return not pipeline.steps and chunkable(pipeline.operator, (1, 1, 3))
+
+
+def _chunk_matrix(p: Pipeline) -> np.ndarray | None:
+    """The pipeline's conversion and ``scale`` as one matrix (``None``: the identity)."""
+    if p.matrix is None and p.scale == 1.0:
+        return None
+    m = np.eye(3) if p.matrix is None else np.asarray(p.matrix, np.float64)
+    return m * p.scale
+
+
+def _render_chunked(p: Pipeline, rgb: np.ndarray, values: dict | None) -> np.ndarray:
+    from ..tile import tonemap_chunked
+
+    op = p.operator if values is None else with_values(p.operator, values)
+    return tonemap_chunked(op, rgb, _chunk_matrix(p), finish=p.finish)[1]
+
+
+def _measure_chunked(p: Pipeline, rgb: np.ndarray, pooled: bool) -> dict:
+    """:func:`~hdrjax.batch._sequence.measure_batch`'s record of one frame, from the
+    statistics of fixed-shape chunks."""
+    from ..tile import bind_compiled, statistics_chunked
+
+    op = p.operator
+    statistics_settings(op, pooled)  # a one-line error for statistics that do not merge
+    st = statistics_chunked(op, rgb, _chunk_matrix(p))
+    bound = jax.device_get(bind_compiled(op, st)) if op.unset() else op
+    rec: dict[str, Any] = {"values": estimated_values(op, bound)}
+    if pooled:
+        rec["stats"] = None if st is None else host_statistics(st)
+    return rec
 
 
 def dispatch_render(
@@ -93,13 +145,17 @@ def dispatch_render(
     ``key``: the frames' :func:`group_key`. ``values``: per-frame parameters (sequence
     modes) or ``None`` (measured per frame).
     Returns the device array (asynchronous); its first ``len(frames)`` entries are the
-    outputs.
+    outputs. A :func:`chunked` pipeline returns the list of the frames' outputs (NumPy,
+    frames of any sizes).
     """
     n = len(frames)
     if not 1 <= n <= batch_size:
         raise ValueError(f"frames: expected 1..{batch_size} frames, got {n}")
     _, source, clean = key
     p = pipeline.for_source(source)
+    if chunked(p):
+        vals = [None] * n if values is None else list(values)
+        return [_render_chunked(p, f, v) for f, v in zip(frames, vals, strict=True)]
     ops = None
     if values is not None:
         vals = list(values) + [values[-1]] * (batch_size - n)
@@ -114,6 +170,8 @@ def measure_frames(
     sharing the :func:`group_key` ``key``."""
     _, source, clean = key
     p = pipeline.for_source(source)
+    if chunked(p):
+        return [_measure_chunked(p, f, pooled) for f in frames]
     return measure_batch(p, _padded(frames, batch_size), pooled, clean)[: len(frames)]
 
 
@@ -130,7 +188,7 @@ def _read_or_error(path: str, allow_nan: bool):
         return e
 
 
-def _groups(items, allow_nan):
+def _groups(items, allow_nan, pipeline):
     """Read ``items`` (``(index, path, ...)``, in threads) and group them by shape;
     failures listed apart."""
     groups: dict[tuple, list] = {}
@@ -142,7 +200,7 @@ def _groups(items, allow_nan):
             failed[item[0]] = str(res)
             continue
         rgb, w = res
-        groups.setdefault(group_key(rgb, w), []).append((item, rgb, w))
+        groups.setdefault(group_key(rgb, w, pipeline), []).append((item, rgb, w))
     return groups, failed
 
 
@@ -156,7 +214,7 @@ def measure_task(
     """Dask task: measure a chunk. Returns ``{"records": {index: record}, "stats": ...,
     "failed": {index: message}}`` (the chunk's statistics already merged, ``None`` unless
     ``pooled``)."""
-    groups, failed = _groups(items, allow_nan)
+    groups, failed = _groups(items, allow_nan, pipeline)
     records: dict[int, dict] = {}
     for key, members in groups.items():
         for start in range(0, len(members), batch_size):
@@ -179,16 +237,15 @@ def render_task(
     Returns ``{index: None (written) or error message}``. Outputs are written atomically
     on the worker, so a killed worker leaves no partial file and its chunk can be re-run.
     """
-    groups, failed = _groups(items, allow_nan)
+    groups, failed = _groups(items, allow_nan, pipeline)
     result: dict[int, str | None] = dict(failed)
     for key, members in groups.items():
         for start in range(0, len(members), batch_size):
             part = members[start : start + batch_size]
             values = None if part[0][0][3] is None else [m[0][3] for m in part]
             try:
-                out = np.asarray(
-                    dispatch_render(pipeline, [m[1] for m in part], key, values, batch_size)
-                )
+                out = dispatch_render(pipeline, [m[1] for m in part], key, values, batch_size)
+                out = out if isinstance(out, list) else np.asarray(out)
             except Exception as e:  # a failed batch fails its frames, not the run
                 for m in part:
                     result[m[0][0]] = f"{m[0][1]}: processing failed: {e}"

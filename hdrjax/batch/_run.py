@@ -165,13 +165,14 @@ class _HostBatch:
 
     def __init__(self, out: Any) -> None:
         self._out = out
-        self._host: np.ndarray | None = None
+        self._host: np.ndarray | list[np.ndarray] | None = None
         self._lock = threading.Lock()
 
-    def get(self) -> np.ndarray:
+    def get(self) -> np.ndarray | list[np.ndarray]:
         with self._lock:
             if self._host is None:
-                self._host = np.asarray(self._out)
+                out = self._out
+                self._host = out if isinstance(out, list) else np.asarray(out)
                 self._out = None
             return self._host
 
@@ -235,7 +236,7 @@ def _measure_local(
         if e.index in keep and cached + rgb.nbytes <= cache_bytes:
             cache[e.index] = res
             cached += rgb.nbytes
-        key = group_key(rgb, w)
+        key = group_key(rgb, w, pipeline)
         buffers.setdefault(key, []).append((e, rgb))
         if len(buffers[key]) == batch_size:
             flush(key)
@@ -296,7 +297,7 @@ def _render_local(
                 col.fail(e, str(res))
                 continue
             rgb, w = res
-            key = group_key(rgb, w)
+            key = group_key(rgb, w, pipeline)
             buffers.setdefault(key, []).append((e, rgb))
             if len(buffers[key]) == batch_size:
                 flush(key)

@@ -93,7 +93,7 @@ def _measure_batch(pipeline: Pipeline, frames, pooled: bool, clean: bool):
     return map_frames(pipeline, lambda f: _frame_measure(op, f, pooled, clean), x, clean)
 
 
-def _host(st: Statistics) -> Statistics:
+def host_statistics(st: Statistics) -> Statistics:
     """Statistics as NumPy leaves: integers in int64, floats in float64 (exact sums over
     long sequences)."""
 
@@ -122,7 +122,8 @@ def measure_batch(
         rec: dict[str, Any] = {"values": {k: np.asarray(v)[i] for k, v in res["values"].items()}}
         if pooled:
             st = res["stats"]
-            rec["stats"] = None if st is None else _host(jax.tree.map(lambda v, i=i: v[i], st))
+            st = None if st is None else jax.tree.map(lambda v, i=i: v[i], st)
+            rec["stats"] = None if st is None else host_statistics(st)
         out.append(rec)
     return out
 
@@ -133,7 +134,7 @@ def merge_statistics(records: Sequence[dict], into: Statistics | None = None) ->
     for r in records:
         st = r.pop("stats", None)
         if st is not None:
-            into = st if into is None else _host(into.merge(st))
+            into = st if into is None else host_statistics(into.merge(st))
     return into
 
 
@@ -160,7 +161,7 @@ def pooled_stats(stats: Statistics | Sequence[Statistics]) -> LuminanceStats:
     return jax.jit(lambda s: s.luminance_stats())(_on_device(merged))
 
 
-def _estimated(op: AbstractOperator, bound: AbstractOperator) -> dict[str, np.ndarray]:
+def estimated_values(op: AbstractOperator, bound: AbstractOperator) -> dict[str, np.ndarray]:
     out = {}
     for n in op.unset():
         v = getattr(bound, n)
@@ -175,7 +176,7 @@ def shared_values(op: AbstractOperator, merged: Statistics | None) -> dict[str, 
     if not op.unset():
         return {}
     st = None if merged is None else _on_device(merged)
-    return _estimated(op, jax.device_get(_bind(op, st)))
+    return estimated_values(op, jax.device_get(_bind(op, st)))
 
 
 def smooth_series(values: np.ndarray, tau: float, log: bool | None = None) -> np.ndarray:
@@ -242,6 +243,8 @@ def stack_operators(op: AbstractOperator, values: Sequence[dict]) -> AbstractOpe
 
 
 __all__ = [
+    "estimated_values",
+    "host_statistics",
     "measure_batch",
     "merge_statistics",
     "pooled_stats",

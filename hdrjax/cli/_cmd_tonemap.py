@@ -1,8 +1,10 @@
 """``hdrjax tonemap INPUT -o OUTPUT``: tone-map an HDR file to a display image."""
 
 import argparse
+import dataclasses
 import os
 import time
+from typing import Any
 
 from ._common import (
     HDR_EXT,
@@ -16,6 +18,7 @@ from ._common import (
     read_image,
     refuse_overwriting_inputs,
 )
+from ._registry import operators
 
 SHORTCUTS = {"white": "L_white"}
 """Named options whose parameter has another name; the others (``--key``, ``--L-wa``…)
@@ -92,17 +95,12 @@ def add_set_argument(p: argparse.ArgumentParser, extra: str = "") -> None:
 
 def add_parameter_shortcuts(p: argparse.ArgumentParser, options: tuple[str, ...]) -> None:
     """Named options ``--key``, ``--white``… for common parameters (shortcuts for ``--set``),
-    their help and type from the registered operators' metadata."""
-    from ..operators import get_operator, operator_names, parameter_info
-
+    their help and type from the registered operators' metadata (:mod:`._registry`: no JAX
+    import)."""
+    entries = operators()
     for dest in options:
         name = SHORTCUTS.get(dest, dest)
-        found = [
-            (op, info)
-            for op in operator_names()
-            for info in parameter_info(get_operator(op))
-            if info.name == name
-        ]
+        found = [(op.name, info) for op in entries for info in op.parameters if info.name == name]
         _, first = found[0]
         positive = all(i.range is not None and i.range[0] >= 0 for _, i in found)
         unit = f" [{first.unit}]" if first.unit else ""
@@ -219,6 +217,23 @@ def check_output(args: argparse.Namespace) -> str:
     return ext
 
 
+def tonemap_and_encode(args: argparse.Namespace, op, rgb, matrix=None):
+    """``(measured operator, encode_output's array)`` for the file's pixels ``rgb`` (NumPy,
+    converted by ``matrix`` into the working space). A pointwise operator runs on
+    fixed-shape chunks of the pixels (:func:`hdrjax.tile.tonemap_chunked`): the same
+    compiled programs for every image size; a local one on the whole image."""
+    import numpy as np
+
+    from ..tile import chunkable, tonemap_chunked
+
+    converted = matrix is not None
+    if chunkable(op, rgb.shape):
+        finish = display_encoding(args, converted)
+        return tonemap_chunked(op, np.asarray(rgb), matrix, finish=finish)
+    measured = eqx_jit_measure(op, rgb, matrix)
+    return measured, encode_output(args, apply_in_space(measured, rgb, matrix), converted)
+
+
 def encode_output(args: argparse.Namespace, display, converted: bool = False):
     """Display-referred linear RGB in the working space → the array written to
     ``args.output`` (NumPy): encoded for the display for .png/.jpg/.tif, linear float for
@@ -229,18 +244,50 @@ def encode_output(args: argparse.Namespace, display, converted: bool = False):
     import jax
     import numpy as np
 
-    from ..display import encode
+    return np.asarray(jax.block_until_ready(encode_display(args, display, converted)))
 
-    out = display
-    if output_ext(args) in LDR_EXT:
-        disp = output_display(args)
-        space, _ = colour_settings(args)
-        if disp.name == "sRGB" and space.is_rec709 and args.gamut is None and not converted:
-            out = encode(out, "srgb")  # the common case: no conversion, per-channel clip
-        else:
-            kw = {} if args.peak is None else {"peak": args.peak}
-            out = encode(out, display=disp, space=space, gamut=args.gamut, **kw)
-    return np.asarray(jax.block_until_ready(out))
+
+def encode_display(args: argparse.Namespace, display, converted: bool = False):
+    """:func:`encode_output` without the copy to NumPy (a device array)."""
+    return display_encoding(args, converted)(display)
+
+
+@dataclasses.dataclass(frozen=True)
+class DisplayEncoding:
+    """How ``tonemap`` encodes the operator's output for its file (:func:`encode_display`),
+    as a value: equal settings compare and hash equal, so the compiled chunk program that
+    ends with it is reused (:func:`hdrjax.tile.tonemap_chunked`)."""
+
+    ldr: bool  # encoded for a display (.png/.jpg/.tif), else linear float
+    display: Any  # hdrjax.display.Display
+    space: Any  # hdrjax.spaces.Space: the working space
+    gamut: str | None
+    peak: float | None
+    converted: bool  # the file was converted into the working space
+
+    def __call__(self, linear):
+        from ..display import encode
+
+        if not self.ldr:
+            return linear
+        disp, space = self.display, self.space
+        if disp.name == "sRGB" and space.is_rec709 and self.gamut is None and not self.converted:
+            return encode(linear, "srgb")  # the common case: no conversion, per-channel clip
+        kw = {} if self.peak is None else {"peak": self.peak}
+        return encode(linear, display=disp, space=space, gamut=self.gamut, **kw)
+
+
+def display_encoding(args: argparse.Namespace, converted: bool = False) -> DisplayEncoding:
+    """The :class:`DisplayEncoding` of the command's arguments."""
+    ldr = output_ext(args) in LDR_EXT
+    return DisplayEncoding(
+        ldr=ldr,
+        display=output_display(args) if ldr else None,
+        space=colour_settings(args)[0] if ldr else None,
+        gamut=getattr(args, "gamut", None),
+        peak=getattr(args, "peak", None),
+        converted=converted,
+    )
 
 
 def write_output(args: argparse.Namespace, encoded) -> None:
@@ -435,8 +482,7 @@ def run(args: argparse.Namespace) -> int:
 
     op = with_file_weights(op, img, args)
     t1 = time.perf_counter()
-    measured = eqx_jit_measure(op, rgb, m)
-    out = encode_output(args, apply_in_space(measured, rgb, m), converted=m is not None)
+    measured, out = tonemap_and_encode(args, op, rgb, m)
     t_map = time.perf_counter() - t1
     n_bad = int(np.count_nonzero(~np.all(np.isfinite(rgb), axis=-1)))
     t2 = time.perf_counter()

@@ -23,6 +23,15 @@ from ._apply import (
     operator_statistics as operator_statistics,
     statistics as statistics,
 )
+from ._chunks import (
+    CHUNK as CHUNK,
+    bind_compiled as bind_compiled,
+    chunkable as chunkable,
+    map_chunked as map_chunked,
+    measure_chunked as measure_chunked,
+    statistics_chunked as statistics_chunked,
+    tonemap_chunked as tonemap_chunked,
+)
 from ._dask import (
     dask_operator_statistics as dask_operator_statistics,
     dask_statistics as dask_statistics,
@@ -39,6 +48,7 @@ from ._steps import (
 )
 
 __all__ = [
+    "CHUNK",
     "DEFAULT_TILE",
     "TILE_MODES",
     "AbstractStep",
@@ -48,9 +58,15 @@ __all__ = [
     "Neighbourhood",
     "Tonemap",
     "apply",
+    "bind_compiled",
+    "chunkable",
     "dask_operator_statistics",
     "dask_statistics",
+    "map_chunked",
+    "measure_chunked",
     "operator_statistics",
     "statistics",
+    "statistics_chunked",
     "to_dask",
+    "tonemap_chunked",
 ]

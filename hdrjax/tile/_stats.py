@@ -92,6 +92,13 @@ def merge_blocks(
             " image (use percentile_method='histogram', or run the whole image)"
         )
     parts = run(block_statistics, (), dict(weights=w, settings=s, dtype=stats_dtype(dtype)))
+    return merge_parts(parts, n_pixels)
+
+
+def merge_parts(parts: Iterable[Statistics], n_pixels: int) -> tuple[Statistics, float]:
+    """Statistics of the parts of one image (NumPy leaves) merged on the host, the log sums
+    in float64, with the image's pixel count ``n_pixels`` (padding left out), and their
+    log sum in float64."""
     merged = None
     for p in parts:
         p = eqx.tree_at(lambda t: t.log_sum, p, np.float64(p.log_sum))  # float64 on the host
@@ -151,6 +158,7 @@ __all__ = [
     "block_statistics",
     "call_host",
     "merge_blocks",
+    "merge_parts",
     "numpy_runner",
     "settings_for",
     "summary",

@@ -727,6 +727,24 @@ CASES["tile.statistics"] = Case(
     equals=(_measure, 1e-5, 1e-6),
 )
 
+# --- chunks: the pixels of any image in fixed-shape chunks equal the whole-image operator ---
+_CHUNK = (3, 5)
+"""Chunks of 15 pixels: the 8×8 family images in five chunks, the last one padded."""
+CASES["tile.tonemap_chunked"] = Case(
+    lambda x: htile.tonemap_chunked(_REINHARD, np.asarray(x), chunk=_CHUNK)[1],
+    (
+        "hdrjax.tile.tonemap_chunked",
+        "hdrjax.tile.measure_chunked",
+        "hdrjax.tile.statistics_chunked",
+        "hdrjax.tile.map_chunked",
+        "hdrjax.tile.bind_compiled",
+        "hdrjax.tile.chunkable",
+    ),
+    jit=False,  # NumPy side: chunks are copied out of the image
+    grad=False,  # the operator's gradients are its own cases
+    equals=(_reinhard, 2e-5, 1e-6),
+)
+
 # --- batch: the frame pipeline on arrays equals the operator ---------------------------------
 _PIPELINE = hb.Pipeline("reinhard2002", format="exr")  # float32 linear output, no encoding
 CASES["batch.render_batch"] = Case(
@@ -949,6 +967,10 @@ for _n in CASES:
         _step = TILE_STEPS[_n[len("tile.apply[") : -1]][0]
         _PARAMS[_n] = (("tile", lambda x, st=_step: htile.apply(st(), np.asarray(x), tile=0)),)
 _PARAMS["tile.statistics"] = (("tile", lambda x: htile.statistics(np.asarray(x), tile=-4)),)
+_PARAMS["tile.tonemap_chunked"] = (
+    ("chunk", lambda x: htile.tonemap_chunked(_REINHARD, np.asarray(x), chunk=(0, 4))),
+    ("op", lambda x: htile.tonemap_chunked(hdrjax.operators.Reinhard2002Local(), np.asarray(x))),
+)
 _ACCEPTS["tile.apply[Mean]"] = PER_CHANNEL
 _ACCEPTS["tile.apply[Neighbourhood]"] = PER_CHANNEL
 _ACCEPTS["tile.apply[Median]"] = {"channels1": ("one channel is its own luminance", grey)}
