@@ -15,6 +15,13 @@ import numpy as np
 from jaxtyping import Array
 
 
+def positive_power(x: Array, p: float) -> Array:
+    """``x ** p`` for ``x > 0`` as ``exp(p ln x)``: on XLA:CPU about 5× faster than
+    ``jnp.power`` (which handles every sign and special case of the base), within a few
+    float ulps of it. Callers mask ``x ≤ 0`` (``jnp.where(pos, x, 1.0)``)."""
+    return jnp.exp(jnp.log(x) * p)
+
+
 def ln_max(dtype) -> float:
     """The largest ``x`` of ``dtype`` whose ``exp`` is finite, with a few ulps of margin
     (``ln(max)`` rounded up gives +Inf; XLA's ``exp`` may round differently from NumPy's):

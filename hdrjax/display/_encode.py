@@ -47,6 +47,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check, spaces
+from .._scale import positive_power
 from ..spaces import SpaceLike
 from ._displays import DEFAULT_PEAK, Display, get_display
 from ._gamut import DEFAULT_GAMUT, GamutMethod, flush, map_gamut, method_name, sanitise
@@ -75,7 +76,7 @@ def srgb_encode(linear: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     _check.real(linear, "linear")
     x = _clip(jnp.asarray(linear, jnp.result_type(float)))
     hi = x > SRGB_THRESHOLD
-    powed = 1.055 * jnp.power(jnp.where(hi, x, 1.0), 1.0 / 2.4) - 0.055
+    powed = 1.055 * positive_power(jnp.where(hi, x, 1.0), 1.0 / 2.4) - 0.055
     return jnp.where(hi, powed, 12.92 * x)
 
 
@@ -84,7 +85,7 @@ def srgb_decode(encoded: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     _check.real(encoded, "encoded")
     y = _clip(jnp.asarray(encoded, jnp.result_type(float)))
     hi = y > 12.92 * SRGB_THRESHOLD
-    return jnp.where(hi, jnp.power((jnp.where(hi, y, 1.0) + 0.055) / 1.055, 2.4), y / 12.92)
+    return jnp.where(hi, positive_power((jnp.where(hi, y, 1.0) + 0.055) / 1.055, 2.4), y / 12.92)
 
 
 def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[Array, "..."]:
@@ -94,7 +95,7 @@ def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[A
         raise ValueError(f"gamma: expected a number > 0, got {gamma!r}")
     x = _clip(jnp.asarray(linear, jnp.result_type(float)))
     pos = x > 0
-    return jnp.where(pos, jnp.power(jnp.where(pos, x, 1.0), 1.0 / gamma), 0.0)
+    return jnp.where(pos, positive_power(jnp.where(pos, x, 1.0), 1.0 / gamma), 0.0)
 
 
 def quantize(encoded: ArrayLike, bits: Literal[8, 16] = 8) -> np.ndarray:

@@ -31,6 +31,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._scale import positive_power
 from ._displays import DEFAULT_PEAK
 
 PQ_PEAK = 10000.0
@@ -56,19 +57,19 @@ HLG_REFERENCE_WHITE = (math.exp((HLG_REFERENCE_SIGNAL - _HLG_C) / _HLG_A) + _HLG
 def pq_inverse_eotf(y: Array) -> Array:
     """SMPTE ST 2084 inverse EOTF of ``y = L / 10000`` (``y ≥ 0``; float array)."""
     pos = y > 0
-    ym = jnp.where(pos, jnp.power(jnp.where(pos, y, 1.0), _M1), 0.0)
-    return jnp.power((_C1 + _C2 * ym) / (1.0 + _C3 * ym), _M2)
+    ym = jnp.where(pos, positive_power(jnp.where(pos, y, 1.0), _M1), 0.0)
+    return positive_power((_C1 + _C2 * ym) / (1.0 + _C3 * ym), _M2)
 
 
 def pq_eotf(signal: Array) -> Array:
     """SMPTE ST 2084 EOTF: ``y = L / 10000`` of a signal in [0, 1] (float array)."""
     e = jnp.clip(signal, 0.0, 1.0)
     pos = e > 0
-    ep = jnp.where(pos, jnp.power(jnp.where(pos, e, 1.0), 1.0 / _M2), 0.0)
+    ep = jnp.where(pos, positive_power(jnp.where(pos, e, 1.0), 1.0 / _M2), 0.0)
     num = ep - _C1
     lit = num > 0
     ratio = jnp.where(lit, num, 1.0) / (_C2 - _C3 * ep)
-    return jnp.where(lit, jnp.power(ratio, 1.0 / _M1), 0.0)
+    return jnp.where(lit, positive_power(ratio, 1.0 / _M1), 0.0)
 
 
 def hlg_oetf(e: Array) -> Array:

@@ -2,14 +2,14 @@
 
 A pointwise operator (halo 0: each output pixel depends on its own pixel and on image
 statistics) does not care where a pixel lies, so the pixels of any image, taken in memory
-order, are cut into chunks of :data:`CHUNK` pixels; the last is padded. Two programs serve
+order, are cut into chunks of :data:`CHUNK` pixels; the last is padded with copies of its
+first pixel, which the statistics take out again. Two programs serve
 every image size (per operator, dtype and working space):
 
-1. statistics of one chunk (the last one padded with NaN, which every statistic leaves
-   out), merged on the host in float64 (:func:`~hdrjax.tile._stats.merge_parts`) and bound
+1. statistics of one chunk, merged on the host in float64 (:func:`~hdrjax.tile._stats.merge_parts`) and bound
    by the operator (:meth:`~hdrjax.operators.AbstractOperator.bind`, one more small
    program);
-2. the bound operator on one chunk (padded with zeros, whose outputs are dropped).
+2. the bound operator on one chunk (the padding's outputs are dropped).
 
 A folder of images of many sizes then compiles each operator once instead of once per size
 (about 1 s each on XLA:CPU, 0.4 s from the persistent cache). The result equals the
@@ -82,11 +82,10 @@ def _method(op: AbstractOperator) -> str:
     return "no" if settings is None else f"{StatisticsSettings(*settings).method!r}"
 
 
-def _chunks(
-    rgb: np.ndarray, fill: float, chunk: tuple[int, int]
-) -> Iterator[tuple[slice, np.ndarray]]:
+def _chunks(rgb: np.ndarray, chunk: tuple[int, int]) -> Iterator[tuple[slice, np.ndarray]]:
     """``(pixel slice, chunk)`` over the pixels of ``rgb`` in memory order; the last chunk
-    padded with ``fill``."""
+    padded with copies of its first pixel (a pixel of the image: no new value, and the
+    statistics take the copies out again, :func:`_chunk_statistics`)."""
     c = rgb.shape[-1]
     flat = np.reshape(rgb, (-1, c))
     size = chunk[0] * chunk[1]
@@ -94,18 +93,34 @@ def _chunks(
         part = flat[start : start + size]
         n = part.shape[0]
         if n < size:
-            part = np.concatenate([part, np.full((size - n, c), fill, part.dtype)])
+            part = np.concatenate([part, np.broadcast_to(part[:1], (size - n, c))])
         yield slice(start, start + n), part.reshape(chunk + (c,))
 
 
 @eqx.filter_jit
-def _chunk_statistics(op: AbstractOperator, chunk, matrix):
+def _chunk_statistics(op: AbstractOperator, chunk, matrix, copies):
+    """The statistics of a chunk less ``copies`` copies of its first pixel (the padding of
+    :func:`_chunks`): the copies are measured with the rest, on the unmasked path of a
+    finite chunk, and their counts and sums taken out; extrema stay, since the copied
+    pixel is one of the image's."""
     x = chunk
     if matrix is not None:
         from ..spaces import convert
 
         x = convert(x, matrix)
-    return rgb_statistics(x, op.weights_, StatisticsSettings(*op.statistics_settings()))
+    settings = StatisticsSettings(*op.statistics_settings())
+    st = rgb_statistics(x, op.weights_, settings)
+    one = rgb_statistics(x[:1, :1], op.weights_, settings)
+    less = lambda a, b: None if a is None else a - b * copies.astype(a.dtype)  # noqa: E731
+    return dataclasses.replace(
+        st,
+        n_pixels=less(st.n_pixels, one.n_pixels),
+        n_finite=less(st.n_finite, one.n_finite),
+        n_positive=less(st.n_positive, one.n_positive),
+        log_sum=less(st.log_sum, one.log_sum),
+        counts=less(st.counts, one.counts),
+        channel_sum=less(st.channel_sum, one.channel_sum),
+    )
 
 
 @eqx.filter_jit
@@ -135,8 +150,10 @@ def statistics_chunked(
         stats_op, stats_matrix = dataclasses.replace(op, weights=w), None
     m = None if stats_matrix is None else jnp.asarray(stats_matrix, rgb.dtype)
     parts, pending = [], None
-    for _, part in _chunks(rgb, np.nan, chunk):
-        nxt = _chunk_statistics(stats_op, jnp.asarray(part), m)  # asynchronous
+    size = chunk[0] * chunk[1]
+    for where, part in _chunks(rgb, chunk):
+        copies = np.int32(size - (where.stop - where.start))
+        nxt = _chunk_statistics(stats_op, jnp.asarray(part), m, copies)  # asynchronous
         if pending is not None:
             parts.append(jax.device_get(pending))
         pending = nxt
@@ -188,7 +205,7 @@ def map_chunked(
     if out is not None and tuple(out.shape[:2]) != shape[:2]:
         raise ValueError(f"out: expected {shape[:2]} rows and columns, got shape {out.shape}")
     pending = None
-    for where, part in _chunks(rgb, 0.0, chunk):
+    for where, part in _chunks(rgb, chunk):
         res = fn(jnp.asarray(part))  # dispatched asynchronously: overlaps the copy below
         if out is None:
             out = np.empty(rgb.shape[:-1] + res.shape[2:], res.dtype)

@@ -12,6 +12,7 @@ rounding only. Edge tiles are padded with NaN to one shape (one compilation): Na
 left out of every statistic, and the pixel count is the image's.
 """
 
+import dataclasses
 import functools
 from collections.abc import Callable, Iterable, Sequence
 
@@ -96,20 +97,40 @@ def merge_blocks(
 
 
 def merge_parts(parts: Iterable[Statistics], n_pixels: int) -> tuple[Statistics, float]:
-    """Statistics of the parts of one image (NumPy leaves) merged on the host, the log sums
-    in float64, with the image's pixel count ``n_pixels`` (padding left out), and their
-    log sum in float64."""
-    merged = None
-    for p in parts:
-        p = eqx.tree_at(lambda t: t.log_sum, p, np.float64(p.log_sum))  # float64 on the host
-        merged = p if merged is None else merged.merge(p)
-    assert merged is not None, "an image has at least one tile"
-    dt = np.dtype(merged.min.dtype)
-    log_sum = float(merged.log_sum)
-    merged = eqx.tree_at(
-        lambda t: (t.n_pixels, t.log_sum),
-        merged,
-        (np.int32(n_pixels), np.asarray(log_sum, dt)),
+    """Statistics of the parts of one image (NumPy leaves) merged on the host as
+    :meth:`Statistics.merge <hdrjax._stats.Statistics.merge>` merges them (counts in 64
+    bits, the log sums in float64; NumPy, not one small device call per leaf), with the
+    image's pixel count ``n_pixels`` (padding left out), and their log sum in float64."""
+    parts = list(parts)
+    assert parts, "an image has at least one tile"
+    first = parts[0]
+    for p in parts[1:]:
+        if (p.delta, p.m, p.channel_sum is None) != (
+            first.delta,
+            first.m,
+            first.channel_sum is None,
+        ):
+            raise ValueError("parts: statistics measured with different settings")
+        if p.exact is not None:
+            raise ValueError("parts: percentile_method='exact' statistics do not merge")
+    total = lambda name, dt: sum(np.asarray(getattr(p, name), dt) for p in parts)  # noqa: E731
+    log_sum = float(total("log_sum", np.float64))
+    dt = np.dtype(np.asarray(first.min).dtype)
+    merged = dataclasses.replace(
+        first,
+        n_pixels=np.int32(n_pixels),
+        n_finite=np.asarray(total("n_finite", np.int64), np.asarray(first.n_finite).dtype),
+        n_positive=np.asarray(total("n_positive", np.int64), np.asarray(first.n_positive).dtype),
+        min=np.min([np.asarray(p.min) for p in parts]).astype(dt),
+        max=np.max([np.asarray(p.max) for p in parts]).astype(dt),
+        min_positive=np.min([np.asarray(p.min_positive) for p in parts]).astype(dt),
+        log_sum=np.asarray(log_sum, dt),
+        counts=None
+        if first.counts is None
+        else total("counts", np.int64).astype(np.asarray(first.counts).dtype),
+        channel_sum=None
+        if first.channel_sum is None
+        else total("channel_sum", np.float64).astype(np.asarray(first.channel_sum).dtype),
     )
     return jax.tree.map(jnp.asarray, merged), log_sum
 
