@@ -3,12 +3,12 @@
 A pointwise operator (halo 0: each output pixel depends on its own pixel and on image
 statistics) does not care where a pixel lies, so the pixels of any image, taken in memory
 order, are cut into chunks of :data:`CHUNK` pixels; the last is padded with copies of its
-first pixel, which the statistics take out again. Two programs serve
-every image size (per operator, dtype and working space):
+first pixel, which the statistics take out again. Two programs serve every image size (per
+operator, dtype and working space):
 
-1. statistics of one chunk, merged on the host in float64 (:func:`~hdrjax.tile._stats.merge_parts`) and bound
-   by the operator (:meth:`~hdrjax.operators.AbstractOperator.bind`, one more small
-   program);
+1. statistics of one chunk, merged on the host (counts in 64 bits, log sums in float64:
+   :func:`~hdrjax.tile._stats.merge_parts`) and bound by the operator
+   (:meth:`~hdrjax.operators.AbstractOperator.bind`, one more small program);
 2. the bound operator on one chunk (the padding's outputs are dropped).
 
 A folder of images of many sizes then compiles each operator once instead of once per size
