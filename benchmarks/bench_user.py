@@ -10,7 +10,8 @@ the "warm" ones.
 
 Rows:
 
-* ``import jax``: ``python -c "import jax"``, the share of every run below that is not ours.
+* ``import jax``: ``python -c "import jax"``, the share of every run below that is not ours;
+  ``hdrjax --help`` and ``hdrjax operators``, which import no JAX.
 * ``tonemap 1024x512 .hdr -> png``: ``hdrjax tonemap data/venice_sunset_1k.hdr -o out.png``
   with a warm cache; peers: ``pfsinrgbe | pfstmo_reinhard02 | pfsoutppm`` (when pfstools is
   installed) and an OpenCV script (``cv2.imread``, Reinhard 2002 with automatic key and
@@ -139,6 +140,9 @@ def single_file(tmp: Path, repeats: int) -> list[dict]:
     cold = _run([*HDRJAX, "tonemap", str(IMAGE), "-o", str(png)], env)
     imp = _timed([sys.executable, "-c", "import jax"], repeats)
     recs.append(_rec("import jax", "python -c 'import jax'", imp))
+    for args in (["--help"], ["operators"]):
+        t = _timed([*HDRJAX, *args], repeats, env)
+        recs.append(_rec(f"hdrjax {args[0]}", "hdrjax (no JAX import)", t))
     warm = _timed([*HDRJAX, "tonemap", str(IMAGE), "-o", str(png)], repeats, env)
     goal = 1.5
     recs.append(
