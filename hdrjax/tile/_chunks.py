@@ -2,9 +2,10 @@
 
 A pointwise operator (halo 0: each output pixel depends on its own pixel and on image
 statistics) does not care where a pixel lies, so the pixels of any image, taken in memory
-order, are cut into chunks of :data:`CHUNK` pixels; the last is padded with copies of its
-first pixel, which the statistics take out again. Two programs serve every image size (per
-operator, dtype and working space):
+order, are cut into chunks of :data:`CHUNK` pixels; the last is padded (with NaN, which
+every statistic leaves out, for the statistics; with copies of a pixel, whose outputs are
+dropped, for the mapping). Two programs serve every image size (per operator, dtype and
+working space):
 
 1. statistics of one chunk, merged on the host (counts in 64 bits, log sums in float64:
    :func:`~hdrjax.tile._stats.merge_parts`) and bound by the operator
@@ -82,10 +83,11 @@ def _method(op: AbstractOperator) -> str:
     return "no" if settings is None else f"{StatisticsSettings(*settings).method!r}"
 
 
-def _chunks(rgb: np.ndarray, chunk: tuple[int, int]) -> Iterator[tuple[slice, np.ndarray]]:
+def _chunks(
+    rgb: np.ndarray, chunk: tuple[int, int], fill: float | None = None
+) -> Iterator[tuple[slice, np.ndarray]]:
     """``(pixel slice, chunk)`` over the pixels of ``rgb`` in memory order; the last chunk
-    padded with copies of its first pixel (a pixel of the image: no new value, and the
-    statistics take the copies out again, :func:`_chunk_statistics`)."""
+    padded with ``fill`` (``None``: copies of its first pixel, a value of the image)."""
     c = rgb.shape[-1]
     flat = np.reshape(rgb, (-1, c))
     size = chunk[0] * chunk[1]
@@ -93,34 +95,22 @@ def _chunks(rgb: np.ndarray, chunk: tuple[int, int]) -> Iterator[tuple[slice, np
         part = flat[start : start + size]
         n = part.shape[0]
         if n < size:
-            part = np.concatenate([part, np.broadcast_to(part[:1], (size - n, c))])
+            pad = part[:1] if fill is None else np.full((1, c), fill, part.dtype)
+            part = np.concatenate([part, np.broadcast_to(pad, (size - n, c))])
         yield slice(start, start + n), part.reshape(chunk + (c,))
 
 
 @eqx.filter_jit
-def _chunk_statistics(op: AbstractOperator, chunk, matrix, copies):
-    """The statistics of a chunk less ``copies`` copies of its first pixel (the padding of
-    :func:`_chunks`): the copies are measured with the rest, on the unmasked path of a
-    finite chunk, and their counts and sums taken out; extrema stay, since the copied
-    pixel is one of the image's."""
+def _chunk_statistics(op: AbstractOperator, chunk, matrix):
+    """The statistics of a chunk: the last one is padded with NaN, which every statistic
+    leaves out (that chunk takes the masked path; taking copies of a pixel out of the sums
+    afterwards instead loses the float sums of a small image to cancellation)."""
     x = chunk
     if matrix is not None:
         from ..spaces import convert
 
         x = convert(x, matrix)
-    settings = StatisticsSettings(*op.statistics_settings())
-    st = rgb_statistics(x, op.weights_, settings)
-    one = rgb_statistics(x[:1, :1], op.weights_, settings)
-    less = lambda a, b: None if a is None else a - b * copies.astype(a.dtype)  # noqa: E731
-    return dataclasses.replace(
-        st,
-        n_pixels=less(st.n_pixels, one.n_pixels),
-        n_finite=less(st.n_finite, one.n_finite),
-        n_positive=less(st.n_positive, one.n_positive),
-        log_sum=less(st.log_sum, one.log_sum),
-        counts=less(st.counts, one.counts),
-        channel_sum=less(st.channel_sum, one.channel_sum),
-    )
+    return rgb_statistics(x, op.weights_, StatisticsSettings(*op.statistics_settings()))
 
 
 @eqx.filter_jit
@@ -150,10 +140,8 @@ def statistics_chunked(
         stats_op, stats_matrix = dataclasses.replace(op, weights=w), None
     m = None if stats_matrix is None else jnp.asarray(stats_matrix, rgb.dtype)
     parts, pending = [], None
-    size = chunk[0] * chunk[1]
-    for where, part in _chunks(rgb, chunk):
-        copies = np.int32(size - (where.stop - where.start))
-        nxt = _chunk_statistics(stats_op, jnp.asarray(part), m, copies)  # asynchronous
+    for _, part in _chunks(rgb, chunk, np.nan):
+        nxt = _chunk_statistics(stats_op, jnp.asarray(part), m)  # asynchronous
         if pending is not None:
             parts.append(jax.device_get(pending))
         pending = nxt

@@ -100,6 +100,21 @@ def test_results_do_not_depend_on_the_chunk_size(name):
     assert int(stats_one.n_pixels) == 31 * 29 and int(stats_one.n_finite) == 31 * 29 - 3
 
 
+def test_a_small_image_in_one_large_chunk():
+    """64 pixels padded to a chunk of 2^19: the padding leaves the sums alone (the pooled
+    log-average of a sequence is these sums)."""
+    x = natural((8, 8), seed=2)
+    for name in ("reinhard2002", "reinhard2004"):
+        op = make(name)
+        got = statistics_chunked(op, x)
+        want = op.statistics(x)
+        assert int(got.n_pixels) == 64 and int(got.n_finite) == 64
+        np.testing.assert_allclose(got.log_sum, want.log_sum, rtol=2e-7, err_msg=name)
+        if want.channel_sum is not None:
+            np.testing.assert_allclose(got.channel_sum, want.channel_sum, rtol=2e-7)
+        np.testing.assert_array_equal(got.counts, want.counts)
+
+
 def test_converted_pixels_equal_the_compiled_conversion():
     """XYZ pixels into sRGB: the chunked statistics (weights w·M on the file's pixels) and
     mapping equal measure_in_space/apply_in_space, for a luminance curve and an operator
