@@ -164,8 +164,9 @@ def user_figures(path=USER_RESULTS) -> dict[str, str]:
         "NEW": s2(new["median_s"]),
         "EXTRA": f"{new['extra']['extra_s']:+.2f}",
         "NEWMET": "met" if new["extra"]["met"] else "**not met**",
+        "SEEN": s2(new["extra"]["seen_size_s"]),
         "NEW_SPREAD": s2(new["spread_s"]),
-        "WARM_SPREAD": s2(warm["spread_s"]),
+        "SEEN_SPREAD": s2(new["extra"]["seen_spread_s"]),
         "N": str(n),
         "BWARM": s1(bwarm["median_s"]),
         "BCOLD": s1(bcold["median_s"]),
@@ -189,7 +190,8 @@ def test_user_level_figures_are_the_user_benchmark():
         f"| `hdrjax tonemap` 1024×512 `.hdr` → PNG, warm cache | {f['WARM']} s ({f['SHARE']} %"
         f" of it `import jax`) | pfstmo pipe {f['PFS']} s, OpenCV script {f['CV']} s |",
         f"| the same, cold cache | {f['COLD']} s |",
-        f"| the same on an image size never seen | {f['NEW']} s ({f['EXTRA']} s) | |"
+        f"| the same on image sizes never seen, against a seen one | {f['NEW']} s / {f['SEEN']}"
+        f" s ({f['EXTRA']} s) | |"
         f" ≤ +0.1 s: {f['NEWMET']} |",
         f"| `hdrjax batch`, {f['N']} frames of {f['N']} sizes around 1 Mpixel, warm / cold cache"
         f" | {f['BWARM']} s / {f['BCOLD']} s | pfstmo shell loop {f['BPFS']} s:"
@@ -203,5 +205,5 @@ def test_user_level_figures_are_the_user_benchmark():
         assert _flat(row) in text, f"README's user-level figures differ from the results: {row}"
     assert float(f["WARM"]) > 1.5  # the README says this goal is not met
     # "within the two rows' run-to-run spread"
-    assert abs(float(f["EXTRA"])) <= float(f["NEW_SPREAD"]) + float(f["WARM_SPREAD"])
+    assert abs(float(f["EXTRA"])) <= float(f["NEW_SPREAD"]) + float(f["SEEN_SPREAD"])
     assert float(f["BRW"]) <= 0.5 and float(f["BRC"]) <= 0.5 and float(f["BRS"]) <= 1.1
