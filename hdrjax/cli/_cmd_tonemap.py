@@ -356,7 +356,7 @@ def _parse_value(cls, info, text: str, value: str):
     kind = "one of" if info.choices else "a number in"
     unit = f", {info.unit}" if info.unit else ""
     expected = f"{info.name}: expected {kind} {info.range_text() or 'any value'} ({cls.name}{unit})"
-    if info.choices:
+    if info.choices or value in info.names:  # names: words a number parameter takes
         v = value
     else:
         parts = value.split(",")

@@ -48,6 +48,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check, spaces
 from .._scale import positive_power
+from .._srgb import clip_unit, srgb_decode, srgb_encode
 from ..spaces import SpaceLike
 from ._displays import DEFAULT_PEAK, Display, get_display
 from ._gamut import DEFAULT_GAMUT, GamutMethod, flush, map_gamut, method_name, sanitise
@@ -62,30 +63,7 @@ from ._hdr import (
     pq_of,
 )
 
-SRGB_THRESHOLD = 0.0031308
 _DISPLAY_TRANSFERS = ("srgb", "bt1886", "pq", "hlg", "gamma", "linear")
-
-
-def _clip(x: Array) -> Array:
-    x = jnp.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0)
-    return jnp.clip(x, 0.0, 1.0)
-
-
-def srgb_encode(linear: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
-    """sRGB transfer function (IEC 61966-2-1) after clipping to [0, 1]; differentiable."""
-    _check.real(linear, "linear")
-    x = _clip(jnp.asarray(linear, jnp.result_type(float)))
-    hi = x > SRGB_THRESHOLD
-    powed = 1.055 * positive_power(jnp.where(hi, x, 1.0), 1.0 / 2.4) - 0.055
-    return jnp.where(hi, powed, 12.92 * x)
-
-
-def srgb_decode(encoded: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
-    """Inverse of :func:`srgb_encode` on [0, 1]."""
-    _check.real(encoded, "encoded")
-    y = _clip(jnp.asarray(encoded, jnp.result_type(float)))
-    hi = y > 12.92 * SRGB_THRESHOLD
-    return jnp.where(hi, positive_power((jnp.where(hi, y, 1.0) + 0.055) / 1.055, 2.4), y / 12.92)
 
 
 def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[Array, "..."]:
@@ -93,7 +71,7 @@ def gamma_encode(linear: Float[ArrayLike, "..."], gamma: float = 2.2) -> Float[A
     _check.real(linear, "linear")
     if not gamma > 0:
         raise ValueError(f"gamma: expected a number > 0, got {gamma!r}")
-    x = _clip(jnp.asarray(linear, jnp.result_type(float)))
+    x = clip_unit(jnp.asarray(linear, jnp.result_type(float)))
     pos = x > 0
     return jnp.where(pos, positive_power(jnp.where(pos, x, 1.0), 1.0 / gamma), 0.0)
 
@@ -318,7 +296,7 @@ def encode(
         return srgb_encode(linear)
     if transfer == "gamma":
         return gamma_encode(linear, gamma)
-    return _clip(jnp.asarray(linear, jnp.result_type(float)))
+    return clip_unit(jnp.asarray(linear, jnp.result_type(float)))
 
 
 __all__ = ["encode", "gamma_encode", "quantize", "srgb_decode", "srgb_encode"]

@@ -42,6 +42,8 @@ from ._classic import (
     Schlick1994 as Schlick1994,
     Simple as Simple,
 )
+from ._drago2003 import Drago2003 as Drago2003
+from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
 from ._linear import (
     Q_FACTOR as Q_FACTOR,
     Linear as Linear,
@@ -53,5 +55,17 @@ from ._reinhard2002_local import (
     Reinhard2002Auto as Reinhard2002Auto,
     Reinhard2002Local as Reinhard2002Local,
 )
+from ._reinhard2005 import Reinhard2005 as Reinhard2005
 from ._tabulated import Tabulated as Tabulated
 from ._tumblin import Tumblin1999 as Tumblin1999, TumblinReinhard as TumblinReinhard
+from ._tumblin_rushmeier1993 import TumblinRushmeier1993 as TumblinRushmeier1993
+from ._view_transforms import (
+    AcesHill as AcesHill,
+    AcesNarkowicz2015 as AcesNarkowicz2015,
+    AgX as AgX,
+    Hable2010 as Hable2010,
+    Lottes2016 as Lottes2016,
+    PbrNeutral as PbrNeutral,
+    Uchimura2017 as Uchimura2017,
+)
+from ._ward1994 import Ward1994 as Ward1994

@@ -64,6 +64,27 @@ def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
     )
 
 
+CHROMA = ("ratio", "ycbcr")
+"""How :class:`AbstractLuminanceCurve` puts colour back (its ``chroma`` setting)."""
+
+
+def chroma_field() -> Any:
+    """``chroma``: how a luminance curve puts colour back (:class:`AbstractLuminanceCurve`)."""
+    return parameter(
+        "ratio",
+        help="colour: ratio (RGB scaled by L_d / L_w, hue and saturation kept) or ycbcr (luma"
+        " replaced by L_d, Cb and Cr kept in image units, as GPU shader versions do)",
+        static=True,
+        choices=CHROMA,
+    )
+
+
+def chroma_of(op: Any) -> str:
+    """How an operator puts colour back: its ``chroma`` setting (:func:`chroma_field`)
+    where it declares one, else ``"ratio"``."""
+    return getattr(op, "chroma", "ratio")
+
+
 POOLING = ("mean", "log_mean", "max", "min")
 """How an estimated parameter pools over frames (:class:`ParameterInfo`)."""
 
@@ -91,6 +112,8 @@ class ParameterInfo:
             ``"min"``; ``None`` for a parameter that is not estimated.
         static: a setting fixed at compile time (not a pytree leaf: not differentiable).
         choices: the valid values of a setting that is a name.
+        names: names a number parameter also takes in place of a number (``L_white="max"``),
+            which the operator turns into a number or a setting when it is built.
         shape: the shape of an array parameter (``()``: a scalar; ``None``: any length).
     """
 
@@ -105,24 +128,29 @@ class ParameterInfo:
     static: bool = False
     choices: tuple[str, ...] | None = None
     shape: tuple[int, ...] | None = ()
+    names: tuple[str, ...] = ()
 
     @property
     def required(self) -> bool:
         return self.default is dataclasses.MISSING
 
     def range_text(self) -> str:
-        """The range in interval notation, ``(0, inf)``; the choices ``a | b``; or ``""``."""
+        """The range in interval notation, ``(0, inf)``, followed by the ``names`` it also
+        takes (``(0, inf] or max | inf``); the choices ``a | b``; or ``""``."""
         if self.choices:
             return " | ".join(self.choices)
         if self.range is None:
             return ""
         lo, hi = (f"{v:g}" for v in self.range)
-        return f"{'[('[not self.closed[0]]}{lo}, {hi}{'])'[not self.closed[1]]}"
+        text = f"{'[('[not self.closed[0]]}{lo}, {hi}{'])'[not self.closed[1]]}"
+        return f"{text} or {' | '.join(self.names)}" if self.names else text
 
     def contains(self, value: Any) -> bool:
         """Whether a concrete value (a number, array or name) is valid."""
         if self.choices is not None:
             return value in self.choices
+        if self.names and isinstance(value, str):
+            return value in self.names
         if self.range is None:
             return True
         v = np.asarray(value, np.float64)
@@ -134,7 +162,7 @@ class ParameterInfo:
     def check(self, value: Any, owner: str) -> None:
         """``ValueError`` naming the parameter and its range unless ``value`` is valid;
         ``None`` (estimate) and traced values pass."""
-        if value is None or _traced(value) or self.contains(value):
+        if value is None or traced(value) or self.contains(value):
             return
         shown = value if isinstance(value, str) else np.asarray(value).tolist()
         what = "one of" if self.choices else "a value in"
@@ -169,6 +197,7 @@ def parameter(
     choices: tuple[str, ...] | None = None,
     shape: tuple[int, ...] | None = (),
     converter: Callable[[Any], Any] | None = None,
+    names: tuple[str, ...] = (),
 ) -> Any:
     """An operator field with what the operator knows about it (:class:`ParameterInfo`).
 
@@ -177,7 +206,9 @@ def parameter(
     differentiate them; ``static=True`` makes a setting. ``range`` is an interval,
     ``"(0, inf)"``, ``"[-8, 8]"``, checked by :func:`make_operator` and the command line
     (concrete values only). An ``estimated`` parameter (default ``None``: measured from
-    the image) says how it pools over frames. Read back with :func:`parameter_info`.
+    the image) says how it pools over frames. ``names``: words a number parameter also
+    takes (the operator's ``converter`` or ``__post_init__`` turns them into values).
+    Read back with :func:`parameter_info`.
 
     >>> class Op(AbstractOperator):  # doctest: +SKIP
     ...     key: Array | None = parameter(None, help="the key", range="(0, inf)",
@@ -203,6 +234,7 @@ def parameter(
         static=static,
         choices=tuple(choices) if choices is not None else None,
         shape=shape,
+        names=tuple(names),
     )
     if not static and converter is None:
         converter = param
@@ -217,12 +249,22 @@ def estimated(
     unit: str = "",
     range: str = "(0, inf)",
     shape: tuple[int, ...] | None = (),
+    names: tuple[str, ...] = (),
+    converter: Callable[[Any], Any] | None = None,
 ) -> Any:
     """A parameter estimated from the image: :func:`parameter` with default ``None``
     ("measure this image"), ``estimated=True`` and how the values of several frames pool
     (``"mean"``, ``"log_mean"``, ``"max"``, ``"min"``); positive by default."""
     return parameter(
-        None, help=help, unit=unit, range=range, estimated=True, pooling=pooling, shape=shape
+        None,
+        help=help,
+        unit=unit,
+        range=range,
+        estimated=True,
+        pooling=pooling,
+        shape=shape,
+        names=names,
+        converter=converter,
     )
 
 
@@ -359,6 +401,26 @@ def scale_by_luminance(
     return rgb * (ratio if per_channel else ratio[..., None])
 
 
+def replace_luminance(
+    rgb: Array, L: Array, curve: Callable[[Array], Array], *, per_channel: bool = True
+) -> Array:
+    """``C_out = C_in + L_d − L_w`` with ``L_d = curve(max(L_w, 0))``: the pixel taken to
+    YCbCr with its luminance weights as the luma weights (BT.601's or BT.709's matrix
+    for their primaries), ``Y = L_w`` replaced by ``L_d``, ``Cb`` and ``Cr`` kept, and
+    taken back to RGB.
+
+    The inverse matrix gives ``R = Y + 2(1 − w_R) Cr``, ``B = Y + 2(1 − w_B) Cb`` and ``G``
+    from ``Y = w·RGB``, with ``Cr`` and ``Cb`` proportional to ``R − Y`` and ``B − Y``, so
+    for weights summing to 1 changing ``Y`` alone adds the same amount to R, G and B. The
+    chroma stays in the input's units (it is not scaled with ``Y``); channels may leave
+    [0, 1], negative ones included. ``per_channel``: as in :func:`scale_by_luminance`.
+    """
+    if per_channel:
+        L = jnp.broadcast_to(L[..., None], rgb.shape)
+    shift = curve(jnp.maximum(L, 0.0)) - L
+    return rgb + (shift if per_channel else shift[..., None])
+
+
 def safe_log(x: Array) -> Array:
     """``ln x`` for x > 0, 0 elsewhere, with finite gradients everywhere."""
     pos = x > 0
@@ -443,7 +505,7 @@ class AbstractOperator(eqx.Module):
             raise ValueError(f"measure: expected one image (H, W, 3), got shape {rgb.shape}")
         if not self.unset():
             return self
-        if not _traced(self, rgb):
+        if not traced(self, rgb):
             return _measure_jit(self, rgb)
         return dispatch(
             rgb, self.weights_, self._measure, fix=False, stats=self.statistics_settings()
@@ -451,7 +513,7 @@ class AbstractOperator(eqx.Module):
 
     def __call__(self, rgb: Float[ArrayLike, "*batch H W 3"]) -> Float[Array, "*batch H W 3"]:
         rgb = as_float_image(rgb)
-        if not _traced(self, rgb):
+        if not traced(self, rgb):
             # called eagerly (a notebook, a script): run the compiled function, cached per
             # operator structure and image shape (eager lax.cond would recompile every call)
             return _apply_jit(self, rgb)
@@ -846,10 +908,16 @@ def apply_in_space(op: "AbstractOperator", rgb: Array, matrix: np.ndarray | None
 
 def maps_luminance_ratio(op: "AbstractOperator") -> bool:
     """Whether ``op`` multiplies each pixel by a function of its luminance and of
-    luminance statistics alone (:class:`AbstractLuminanceCurve`'s own mapping), so that it
-    commutes with a colour matrix whose luminance weights it is given."""
+    luminance statistics alone (:class:`AbstractLuminanceCurve`'s own mapping with
+    ``chroma="ratio"``), so that it commutes with a colour matrix whose luminance weights
+    it is given."""
     curve_mapping = getattr(type(op), "_apply", None) is AbstractLuminanceCurve._apply
-    return isinstance(op, AbstractLuminanceCurve) and curve_mapping and _luminance_only(op)
+    return (
+        isinstance(op, AbstractLuminanceCurve)
+        and curve_mapping
+        and chroma_of(op) == "ratio"
+        and _luminance_only(op)
+    )
 
 
 def _luminance_only(op: "AbstractOperator") -> bool:
@@ -891,7 +959,7 @@ def _apply_converted_jit(
     return dispatch(rgb, native_weights, run, fix=True, stats=native.statistics_settings())
 
 
-def _traced(*trees: Any) -> bool:
+def traced(*trees: Any) -> bool:
     """Whether any array in ``trees`` is a tracer (we are inside jit/vmap/grad)."""
     return any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(trees))
 
@@ -926,6 +994,7 @@ def tonemap(
 
 
 __all__ = [
+    "CHROMA",
     "ENTRY_POINT_GROUP",
     "AbstractOperator",
     "ParameterInfo",
@@ -933,6 +1002,8 @@ __all__ = [
     "StatisticsSettings",
     "apply_in_space",
     "bound_stats",
+    "chroma_field",
+    "chroma_of",
     "count_valid",
     "dispatch",
     "estimated",
@@ -947,6 +1018,7 @@ __all__ = [
     "parameter_info",
     "prepare",
     "register",
+    "replace_luminance",
     "safe_log",
     "scale_by_luminance",
     "stats_of",
@@ -997,6 +1069,8 @@ class AbstractLuminanceCurve(AbstractOperator):
             rgb = jnp.clip(_converted(p.rgb, p.to_space, saturate=False), -top, top)
         else:
             rgb = p.rgb
+        if chroma_of(self) == "ycbcr":
+            return replace_luminance(rgb, L, self._curve, per_channel=self.cheap_curve)
         return scale_by_luminance(rgb, L, self._curve, per_channel=self.cheap_curve)
 
     def curve(self, L: ArrayLike) -> Array:

@@ -38,6 +38,7 @@ from ._base import (
     scale_by_luminance,
     weights_field,
 )
+from ._reinhard2005 import channel_average_field, luminance_range_fields, photoreceptor
 
 BANTERLE2011 = (
     "Banterle, Artusi, Debattista, Chalmers 2011, Advanced High Dynamic Range Imaging,"
@@ -284,6 +285,13 @@ class Reinhard2004(AbstractOperator):
     from a logarithm) reproduce colour-hdri exactly, including where they differ from the
     paper, so results match for users switching tools.
 
+    ``reinhard2005`` (:class:`~hdrjax.operators.Reinhard2005`) is the same paper as pfstmo
+    implements it, with the same response (:func:`photoreceptor`) and pfstmo's names and
+    defaults: light adaptation ``l`` (0.75) for ``a`` (0 here), ``c`` 0.5 (0 here), ``m``
+    automatic (0.3 here); the paper's ``I_l = c RGB + (1 − c) L``, the mean luminance (not
+    the log-average) in ``I_g``, the paper's key ``0.3 + 0.7 k^1.4`` and pfstmo's stretch of
+    the response to [0, 1], none of which colour-hdri has.
+
     Attributes:
         f: intensity (brightness) −8 … 8 (0). m: contrast 0.3 … 1 (0.3; ≤ 0 → automatic).
         a: light adaptation 0 … 1 (0). c: chromatic adaptation 0 … 1 (0).
@@ -301,27 +309,14 @@ class Reinhard2004(AbstractOperator):
     c: Array = parameter(
         0.0, help="chromatic adaptation (0: luminance, 1: per channel)", range="[0, 1]"
     )
-    channel_average: Array | None = estimated(
-        "mean of each channel (R, G, B); None: measured",
-        unit="image units",
-        range="[0, inf)",
-        pooling="mean",
-        shape=(3,),
-    )
+    channel_average: Array | None = channel_average_field()
     log_average: Array | None = estimated(
         "log-average luminance; None: measured (offset: float64 machine epsilon)",
         unit="image units",
         pooling="log_mean",
     )
-    L_min: Array | None = estimated(
-        "smallest luminance (automatic m); None: measured",
-        unit="image units",
-        range="[0, inf)",
-        pooling="min",
-    )
-    L_max: Array | None = estimated(
-        "largest luminance (automatic m); None: measured", unit="image units", pooling="max"
-    )
+    L_min: Array | None = luminance_range_fields()[0]
+    L_max: Array | None = luminance_range_fields()[1]
     weights: tuple[float, float, float] = weights_field()
 
     def statistics_settings(self) -> StatisticsSettings | None:
@@ -345,7 +340,6 @@ class Reinhard2004(AbstractOperator):
     def _apply(self, p: Prepared) -> Array:
         rgb = jnp.maximum(p.rgb, 0.0)
         L = jnp.maximum(p.L, 0.0)[..., None]
-        f = jnp.exp(-self.f)
         ln_max = jnp.log(self.L_max)
         ln_min = jnp.log(jnp.maximum(self.L_min, jnp.finfo(L.dtype).tiny))
         # colour-hdri evaluates ``(ln L_max − L_lav) / (ln L_max − ln L_min) ** 1.4``: the
@@ -356,12 +350,7 @@ class Reinhard2004(AbstractOperator):
         I_l = (self.c * rgb + (1 - self.c)) * L
         C_av = self.channel_average.reshape((1,) * (rgb.ndim - 1) + (3,))
         I_g = self.c * C_av + (1 - self.c) * self.log_average
-        I_a = self.a * I_l + (1 - self.a) * I_g
-        base = f * I_a
-        pos = base > 0
-        sigma = jnp.where(pos, jnp.exp(m * jnp.log(jnp.where(pos, base, 1.0))), 0.0)
-        den = rgb + sigma
-        return jnp.where(den > 0, rgb / jnp.where(den > 0, den, 1.0), 0.0)
+        return photoreceptor(rgb, I_l, I_g, self.a, self.f, m)
 
 
 def hable(x: Array, A, B, C, D, E, F) -> Array:
@@ -381,7 +370,14 @@ def hable(x: Array, A, B, C, D, E, F) -> Array:
 @register("filmic")
 class Filmic(AbstractOperator):
     """Hable 2010 filmic curve per channel, normalised by its value at ``linear_whitepoint``
-    (colour-hdri ``tonemapping_operator_filmic``; same parameter names and defaults)."""
+    (colour-hdri ``tonemapping_operator_filmic``; same parameter names and defaults).
+
+    This is Hable's Uncharted 2 curve (:func:`hable`, shared with ``hable2010``,
+    :class:`~hdrjax.operators.Hable2010`): the same formula, white 11.2 and exposure bias 2,
+    but colour-hdri's constants A = 0.22, B = 0.30, E = 0.01 (it cites Hable's GDC 2010
+    slides as well as his post) where ``hable2010`` has the 2010 blog post's A = 0.15,
+    B = 0.50, E = 0.02; and unclamped (above the white it exceeds 1). ``hable2010`` with
+    these three constants equals this operator clamped to [0, 1]."""
 
     reference: ClassVar[str] = (
         "Hable 2010, Uncharted 2: HDR Lighting (Game Developers Conference) and Filmic"

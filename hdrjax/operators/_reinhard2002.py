@@ -31,27 +31,49 @@ promises scale invariance (key, ``L_white`` and ``L̄_w`` measured). hdrjax eval
 sides of the guard, and the fallback, in scaled units (the log-average becomes
 ``s · L̄``, about the key ``a``), which equals hdritools' test exactly where image and scaled
 units coincide (``s = 1``) and is invariant under ``L → kL`` everywhere else.
+
+GPU shader form (settings ``key=0.18, L_white="max", chroma="ycbcr", delta=1e-5``): shader
+versions of the paper's global operator take the white point as the image's largest
+luminance in scaled units, ``L_white = (a / L̄_w) · max(L_w)``, so the brightest pixel maps
+to exactly 1, and replace the luma of YCbCr by ``L_d``, keeping Cb and Cr (which adds
+``L_d − L_w`` to each channel); their log-average and maximum come from
+repeated 4×4 reductions of the image, which equal the plain mean and maximum computed here
+(up to rounding; exactly when the sides are powers of 4). Such versions use the BT.601 luma
+weights (``weights=(0.299, 0.587, 0.114)``) and the offset ``δ = 1e-5``. With YCbCr the
+chroma is not scaled with the luminance: the output is display-referred only for inputs of
+modest range in relative units, and is not scale invariant.
 """
 
+import math
 from typing import Any, ClassVar, Literal
 
 import jax.numpy as jnp
 from jaxtyping import Array
 
-from .._scale import scale
+from .._scale import ln_max, scale
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
 from ._base import (
+    CHROMA,
     AbstractLuminanceCurve,
     StatisticsSettings,
     bound_stats,
+    chroma_field,
     estimated,
     fill,
+    luminance_floor,
+    max_luminance,
+    param,
     parameter,
     register,
     weights_field,
 )
 
 KEY_DEFAULT = 0.18
+WHITE_NAMES = ("max", "inf")
+"""The names ``L_white`` also takes: the largest scaled luminance, or no white point."""
+WHITE_METHODS = ("jgt", "max")
+"""How ``L_white`` is measured when it is ``None``: JGT 2002 Eq. 5, or the largest scaled
+luminance."""
 REFERENCE = (
     "Reinhard, Stark, Shirley, Ferwerda 2002, Photographic tone reproduction for digital"
     " images, ACM TOG 21(3), https://doi.org/10.1145/566654.566575; Reinhard 2002, Parameter"
@@ -74,6 +96,25 @@ def white_parameter() -> Any:
         unit="scaled units",
         range="(0, inf]",
         pooling="log_mean",
+    )
+
+
+def _white_value(x: Any) -> Any:
+    """``L_white``'s converter: its names pass (``Reinhard2002.__post_init__`` resolves
+    them), numbers become parameters."""
+    return x if isinstance(x, str) else param(x)
+
+
+def named_white_parameter() -> Any:
+    """``L_white`` in scaled units that also takes ``"max"`` and ``"inf"``."""
+    return estimated(
+        "smallest scaled luminance mapped to white; max: the largest scaled luminance (the"
+        " brightest pixel maps to 1); inf: L / (1 + L); None: measured as white says",
+        unit="scaled units",
+        range="(0, inf]",
+        pooling="log_mean",
+        names=WHITE_NAMES,
+        converter=_white_value,
     )
 
 
@@ -171,6 +212,23 @@ def jgt_key_and_log_average(op: Any, stats: Statistics | None):
     return st, key, lbar
 
 
+def max_white(st: LuminanceStats, key: Array, log_average: Array) -> Array:
+    """The largest finite luminance in scaled units, ``(key / L̄_w) · L_max`` (GPU shader
+    versions' white point; ``key / L̄_w`` when no pixel is positive).
+
+    Through logarithms clamped to the float range (a product that overflows would make
+    the gradient NaN), and at least :func:`~hdrjax.operators._base.luminance_floor`
+    (1.1e-19 in float32), whose square is a normal float: the compiled curve may evaluate
+    ``L / L_white²``. Only images whose largest scaled luminance is below that floor (the
+    offset ``delta`` dominates the log-average of an image dimmer than about 1e-24) reach
+    it; their brightest pixel then no longer maps to white (but the output stays finite).
+    """
+    ln_white = jnp.log(key) - jnp.log(log_average) + jnp.log(max_luminance(st))
+    dtype = ln_white.dtype
+    lo, hi = math.log(luminance_floor(dtype)), ln_max(dtype)
+    return jnp.exp(jnp.clip(ln_white, lo, hi))
+
+
 def reinhard_curve(L: Array, L_white: Array) -> Array:
     """``L (1 + L / L_white²) / (1 + L)`` written to stay finite for L up to the float max."""
     return (L / (1.0 + L)) * (1.0 + (L / L_white) / L_white)
@@ -187,27 +245,72 @@ class Reinhard2002(AbstractLuminanceCurve):
 
     Attributes:
         key: the key ``a``; ``None`` → JGT Eq. 4 estimate (0.18 is the paper's default).
-        L_white: smallest scaled luminance mapped to white; ``None`` → JGT Eq. 5.
-            ``jnp.inf`` gives the simple operator ``L / (1 + L)``.
+        L_white: smallest scaled luminance mapped to white; ``None`` → measured as ``white``
+            says (JGT Eq. 5 by default). ``"max"``: measured as the largest scaled luminance
+            (sets ``white="max"``); ``"inf"`` or ``jnp.inf``: the simple operator
+            ``L / (1 + L)``.
         log_average: ``L̄_w`` in image units; ``None`` → measured with ``delta``.
         delta: offset inside the log-average (1e-6, HDR Toolbox; GPU shader versions use 1e-5).
         percentile_method: ``"histogram"`` (fast, bounded error) or ``"exact"`` (sort).
         bins: histogram resolution for the percentiles (:func:`hdrjax.stats.percentile`:
             ``2^(ceil(log2 bins) − 3)`` bins per octave, 1024 by default).
-        weights: luminance weights of the image's primaries (Rec.709 default).
+        weights: luminance weights of the image's primaries (Rec.709 default); with
+            ``chroma="ycbcr"`` also the luma weights of the YCbCr matrix.
+        white: how ``L_white`` is measured when it is ``None``: ``"jgt"`` (JGT Eq. 5,
+            the default) or ``"max"`` (the largest luminance in scaled units, GPU shader
+            versions' choice; module docstring).
+        chroma: ``"ratio"`` (default: RGB scaled by ``L_d / L_w``) or ``"ycbcr"`` (luma
+            replaced by ``L_d``, Cb and Cr kept, as GPU shader versions do; not scale
+            invariant, module docstring).
+
+    >>> import hdrjax, numpy as np
+    >>> rgb = np.array([[[0.5, 0.5, 0.5], [4.0, 4.0, 4.0]]], np.float32)
+    >>> out = hdrjax.tonemap(rgb, "reinhard2002", key=0.18, L_white="max")
+    >>> round(float(out[0, 1, 0]), 6)  # the brightest pixel maps to white
+    1.0
     """
 
     reference: ClassVar[str] = REFERENCE
     scale_invariant: ClassVar[bool] = True
+    """With ``chroma="ratio"`` (the default)."""
     default_fit_params: ClassVar[tuple[str, ...]] = ("key", "L_white")
 
     key: Array | None = key_parameter()
-    L_white: Array | None = white_parameter()
+    L_white: Array | None = named_white_parameter()
     log_average: Array | None = log_average_parameter()
     delta: float = delta_setting()
     percentile_method: Literal["histogram", "exact"] = percentile_method_setting()
     bins: int = bins_setting()
     weights: tuple[float, float, float] = weights_field()
+    white: Literal["jgt", "max"] = parameter(
+        "jgt",
+        help="how L_white is measured when None: jgt (JGT 2002 Eq. 5) or max (the largest"
+        " scaled luminance, as GPU shader versions do)",
+        static=True,
+        choices=WHITE_METHODS,
+    )
+    chroma: Literal["ratio", "ycbcr"] = chroma_field()
+
+    def __post_init__(self):
+        # L_white's names: "max" is a way of measuring it, "inf" a value
+        if isinstance(self.L_white, str):
+            if self.L_white not in WHITE_NAMES:
+                raise ValueError(
+                    "L_white: expected a number in (0, inf], None or one of"
+                    f" {' | '.join(WHITE_NAMES)}, got {self.L_white!r}"
+                )
+            if self.L_white == "max":
+                self.white, self.L_white = "max", None
+            else:
+                self.L_white = param(math.inf)
+
+    def __check_init__(self):
+        if self.white not in WHITE_METHODS:
+            raise ValueError(
+                f"white: expected one of {' | '.join(WHITE_METHODS)}, got {self.white!r}"
+            )
+        if self.chroma not in CHROMA:
+            raise ValueError(f"chroma: expected one of {' | '.join(CHROMA)}, got {self.chroma!r}")
 
     def statistics_settings(self) -> StatisticsSettings | None:
         return jgt_settings(self)
@@ -218,7 +321,7 @@ class Reinhard2002(AbstractLuminanceCurve):
         st, key, lbar = jgt_key_and_log_average(self, stats)
         white = self.L_white
         if white is None:
-            white = jgt_white(st, key / lbar)
+            white = max_white(st, key, lbar) if self.white == "max" else jgt_white(st, key / lbar)
         return fill(self, key=key, L_white=white, log_average=lbar)
 
     def _curve(self, L: Array) -> Array:
@@ -229,9 +332,11 @@ class Reinhard2002(AbstractLuminanceCurve):
 
 __all__ = [
     "KEY_DEFAULT",
+    "WHITE_NAMES",
     "Reinhard2002",
     "jgt_key",
     "jgt_white",
     "jgt_white_terms",
+    "max_white",
     "reinhard_curve",
 ]

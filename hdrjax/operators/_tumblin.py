@@ -67,14 +67,21 @@ def tumblin_curve(
     den = 1.855 + 0.4 * (jnp.log(L_da) if gamma_log == "ln" else jnp.log10(L_da))
     g_wd = g_w / den
     m = jnp.power(C_max, (g_wd - 1.0) / 2.0)
+    return ratio_power(L_w, L_wa, g_w / g_d, m * L_da)
+
+
+def ratio_power(L_w: Array, L_wa: Array, exponent: Array, scale: Array) -> Array:
+    """``scale · (L_w / L_wa)^exponent`` for ``L_w ≥ 0`` (0 at ``L_w = 0``), the power law of
+    both Tumblin–Rushmeier operators, finite for every ``L_w`` of the float type when
+    ``scale ≥ 1`` (below, the saturated power itself may overflow: pass 1 and multiply)."""
     ratio = divide(jnp.maximum(L_w, 0.0), L_wa)  # no reciprocal of L_wa: it may be subnormal
     pos = ratio > 0
-    # the exponent γ_w / γ_d exceeds 1 when L_wa > L_da: near the float maximum the power
-    # leaves the float range; it saturates 1 % below the maximum (finite, and a no-op for
-    # every representable result)
-    big = jnp.log(jnp.finfo(ratio.dtype).max) - 0.01 - jnp.log(m * L_da)
-    powed = jnp.where(pos, jnp.exp(jnp.minimum((g_w / g_d) * safe_log(ratio), big)), 0.0)
-    return m * L_da * powed
+    # an exponent above 1 (an adaptation brighter than the display's) takes the power out
+    # of the float range near the float maximum; it saturates 1 % below the maximum
+    # (finite, and a no-op for every representable result)
+    big = jnp.log(jnp.finfo(ratio.dtype).max) - 0.01 - jnp.log(scale)
+    powed = jnp.where(pos, jnp.exp(jnp.minimum(exponent * safe_log(ratio), big)), 0.0)
+    return scale * powed
 
 
 def adaptation_terms(stats: Statistics, method: str) -> tuple[Array, dict[str, Array]]:
@@ -258,6 +265,7 @@ __all__ = [
     "TumblinReinhard",
     "adaptation_luminance",
     "adaptation_terms",
+    "ratio_power",
     "stevens_gamma",
     "tumblin_curve",
 ]

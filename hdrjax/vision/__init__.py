@@ -30,6 +30,11 @@ from .._photometry import (
     TOP_MESOPIC as TOP_MESOPIC,
     scotopic_luminance as scotopic_luminance,
 )
+from .._thresholds import (
+    tvi_photopic as tvi_photopic,
+    tvi_scotopic as tvi_scotopic,
+    ward1994_scale as ward1994_scale,
+)
 from ..operators._budak2005 import (
     AbstractContrastSpace as AbstractContrastSpace,
     ConeOpponentSpace as ConeOpponentSpace,
@@ -44,9 +49,7 @@ from ._contrast import (
     contrast as contrast,
     contrast_scale as contrast_scale,
     display_adaptation as display_adaptation,
-    ward1994_scale as ward1994_scale,
 )
-from ._ferwerda1996 import tvi_photopic as tvi_photopic, tvi_scotopic as tvi_scotopic
 from ._jensen2001 import blue_shift as blue_shift, blue_shift_weight as blue_shift_weight
 from ._pcond import (
     acuity as acuity,

@@ -26,6 +26,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._photometry import LMIN, check_rgb, restore, sanitize
+from .._thresholds import ward1994_scale
 from ._pcond import tvi
 
 ContrastModel = Literal["pcond", "ward1994"]
@@ -38,19 +39,6 @@ DISPLAY_RANGE = 32.0
 WEBER_ONSET = 10.0**1.9
 """cd/m²: above this the cone TVI is Weber's law ``ΔL ∝ L`` (Ferwerda et al. 1996), so the
 visibility-matching scale differs from plain luminance scaling by a display constant only."""
-
-
-def ward1994_scale(
-    L_wa: Float[ArrayLike, "*shape"], L_da: Float[ArrayLike, "*shape"]
-) -> Float[Array, "*shape"]:
-    """Ward 1994 scale factor ``m = [(1.219 + L_da^0.4)/(1.219 + L_wa^0.4)]^2.5``."""
-    _check.real(L_wa, "L_wa")
-    L_wa = jnp.maximum(_check.as_float(L_wa), 0.0)
-    L_da = jnp.maximum(_check.as_float(L_da), 0.0)
-    # x**0.4 has an infinite derivative at 0; evaluate it at a tiny positive value there.
-    pw = jnp.where(L_wa > 0, jnp.where(L_wa > 0, L_wa, 1.0) ** 0.4, 0.0)
-    pd = jnp.where(L_da > 0, jnp.where(L_da > 0, L_da, 1.0) ** 0.4, 0.0)
-    return ((1.219 + pd) / (1.219 + pw)) ** 2.5
 
 
 def display_adaptation(
@@ -124,5 +112,4 @@ __all__ = [
     "contrast",
     "contrast_scale",
     "display_adaptation",
-    "ward1994_scale",
 ]

@@ -207,3 +207,20 @@ def test_user_level_figures_are_the_user_benchmark():
     # "within the two rows' run-to-run spread"
     assert abs(float(f["EXTRA"])) <= float(f["NEW_SPREAD"]) + float(f["SEEN_SPREAD"])
     assert float(f["BRW"]) <= 0.5 and float(f["BRC"]) <= 0.5 and float(f["BRS"]) <= 1.1
+
+
+def test_every_operator_has_a_row_in_the_operator_table():
+    """The table under "Tone mapping from Python" names every built-in operator (the
+    package's own: plug-ins are the user's)."""
+    import hdrjax
+
+    section = README.split("## Tone mapping from Python", 1)[1].split("\n## ", 1)[0]
+    rows = [line for line in section.splitlines() if line.startswith("| `")]
+    named = {n for line in rows for n in re.findall(r"`([a-z0-9_]+)`", line.split(" | ")[0])}
+    builtin = {
+        n
+        for n in hdrjax.operator_names()
+        if hdrjax.get_operator(n).__module__.startswith("hdrjax.")
+    }
+    assert builtin - named == set(), "operators without a row"
+    assert named - builtin == set(), "rows naming no operator"

@@ -46,6 +46,8 @@ NOT_DIFFERENTIABLE = {
     "q": "linear: ISO 12232 lens constant (a static float; other operators' q is a parameter)",
     "space": "budak2005: the colour-contrast model (a module, not a number)",
     "chromaticities": "budak2005: the file's primaries (a tuple fixed by the file)",
+    "look": "agx: choice of ASC CDL look (string)",
+    "compat": "choice of the peer whose departures from the paper are reproduced (string)",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
@@ -61,6 +63,101 @@ R2004 = dict(f=0.5, m=0.6, a=0.3, c=0.4, channel_average=[0.2, 0.3, 0.25], log_a
 # matter here: the test also checks each gradient is non-zero). Values are away from the
 # kinks of max(q, 1), where(m > 0) and where(L_wa > 100).
 CASES = [
+    ("aces_hill", dict(exposure=0.5), ("exposure",)),
+    ("aces_narkowicz2015", dict(exposure=0.5), ("exposure",)),
+    ("agx", dict(exposure=0.5), ("exposure",)),
+    (
+        "drago2003",
+        dict(bias=0.8, L_dmax=90.0, log_average=0.05, L_max=12.0),
+        ("bias", "L_dmax", "log_average", "L_max"),
+    ),
+    ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0), ("L_wa", "L_dmax")),
+    ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0, compat="hdrtoolbox"), ("L_wa", "L_dmax")),
+    (
+        "hable2010",
+        dict(
+            exposure=0.5,
+            shoulder_strength=0.15,
+            linear_strength=0.5,
+            linear_angle=0.1,
+            toe_strength=0.2,
+            toe_numerator=0.02,
+            toe_denominator=0.3,
+            exposure_bias=2.0,
+            linear_whitepoint=11.2,
+        ),  # fmt: skip
+        (
+            "exposure",
+            "shoulder_strength",
+            "linear_strength",
+            "linear_angle",
+            "toe_strength",
+            "toe_numerator",
+            "toe_denominator",
+            "exposure_bias",
+            "linear_whitepoint",
+        ),  # fmt: skip
+    ),
+    (
+        "lottes2016",
+        dict(exposure=0.5, contrast=1.5, shoulder=0.97, hdr_max=9.0, mid_in=0.2, mid_out=0.25),
+        ("exposure", "contrast", "shoulder", "hdr_max", "mid_in", "mid_out"),
+    ),
+    (
+        "pbr_neutral",
+        dict(exposure=0.5, start_compression=0.7, desaturation=0.2),
+        ("exposure", "start_compression", "desaturation"),
+    ),
+    (
+        "reinhard2005",
+        dict(
+            f=0.5, c=0.4, l=0.6, m=0.6, channel_average=[0.2, 0.3, 0.25], V_min=0.02, V_max=0.9
+        ),  # fmt: skip
+        ("f", "c", "l", "m", "channel_average", "V_min", "V_max"),
+    ),
+    (
+        "reinhard2005",
+        dict(
+            f=0.5,
+            c=0.4,
+            l=0.6,
+            channel_average=[0.2, 0.3, 0.25],
+            log_average=0.05,
+            L_min=1e-3,
+            L_max=12.0,
+            V_min=0.02,
+            V_max=0.9,
+            compat="pfstmo",
+        ),  # fmt: skip
+        ("log_average", "L_min", "L_max", "V_min", "V_max"),
+    ),
+    (
+        "tumblin_rushmeier1993",
+        dict(L_wa=0.5, L_dmax=100.0, C_max=100.0),
+        ("L_wa", "L_dmax", "C_max"),
+    ),
+    (
+        "uchimura2017",
+        dict(
+            exposure=0.5,
+            max_display=0.95,
+            contrast=1.1,
+            linear_start=0.25,
+            linear_length=0.35,
+            black_tightness=1.3,
+            pedestal=0.01,
+        ),  # fmt: skip
+        (
+            "exposure",
+            "max_display",
+            "contrast",
+            "linear_start",
+            "linear_length",
+            "black_tightness",
+            "pedestal",
+        ),  # fmt: skip
+    ),
+    ("ward1994", dict(L_wa=0.5, L_dmax=100.0), ("L_wa", "L_dmax")),
     (
         "budak2005",
         dict(display_max=80.0, adaptation=0.5, background=[0.3, 0.25, 0.2]),

@@ -22,7 +22,8 @@ from ..operators.cases import make, natural
 
 NAMES = hdrjax.operator_names()
 LOCAL = {"reinhard2002_local", "reinhard2002_auto"}  # neighbourhood operators (halo > 0)
-CHUNKED = [n for n in NAMES if n not in LOCAL]
+WHOLE = {"reinhard2005"}  # pfstmo's stretch of the output by its own minimum and maximum
+CHUNKED = [n for n in NAMES if n not in LOCAL | WHOLE]
 
 _compiles: list[str] = []
 _counting = [False]
@@ -66,7 +67,8 @@ def _compare(name, got, want):
 
 def test_the_pointwise_operators_run_chunked_the_local_ones_not():
     x = _image()
-    assert {n for n in NAMES if not chunkable(make(n), x.shape)} == LOCAL
+    assert {n for n in NAMES if not chunkable(make(n), x.shape)} == LOCAL | WHOLE
+    assert chunkable(make("reinhard2005").measure(x), x.shape)  # its stretch measured
     exact = make("reinhard2002", percentile_method="exact")
     assert not chunkable(exact, x.shape)  # a sort of the whole image does not merge
     assert chunkable(make("reinhard2002", key=0.18, L_white=4.0, log_average=1.0), x.shape)

@@ -1,4 +1,6 @@
-"""Threshold-versus-intensity curves of Ferwerda, Pattanaik, Shirley & Greenberg (1996).
+"""Threshold curves shared by the vision effects and the operators built on them: the
+threshold-versus-intensity curves of Ferwerda, Pattanaik, Shirley & Greenberg (1996) and
+Ward's (1994) contrast-based scale factor.
 
 Numeric contract: adaptation luminance ``L_a`` in cd/m² (any shape, any float dtype);
 returns the threshold luminance increment ``ΔL`` in cd/m², same shape. Non-positive ``L_a``
@@ -13,8 +15,8 @@ doi:10.1145/237170.237262. Transcribed from banterle/HDR_Toolbox ``TpFerwerda.m`
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
-from .._photometry import log10_floor
+from . import _check
+from ._photometry import log10_floor
 
 
 def tvi_photopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
@@ -49,4 +51,17 @@ def tvi_scotopic(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     return 10.0**t
 
 
-__all__ = ["tvi_photopic", "tvi_scotopic"]
+def ward1994_scale(
+    L_wa: Float[ArrayLike, "*shape"], L_da: Float[ArrayLike, "*shape"]
+) -> Float[Array, "*shape"]:
+    """Ward 1994 scale factor ``m = [(1.219 + L_da^0.4)/(1.219 + L_wa^0.4)]^2.5``."""
+    _check.real(L_wa, "L_wa")
+    L_wa = jnp.maximum(_check.as_float(L_wa), 0.0)
+    L_da = jnp.maximum(_check.as_float(L_da), 0.0)
+    # x**0.4 has an infinite derivative at 0; evaluate it at a tiny positive value there.
+    pw = jnp.where(L_wa > 0, jnp.where(L_wa > 0, L_wa, 1.0) ** 0.4, 0.0)
+    pd = jnp.where(L_da > 0, jnp.where(L_da > 0, L_da, 1.0) ** 0.4, 0.0)
+    return ((1.219 + pd) / (1.219 + pw)) ** 2.5
+
+
+__all__ = ["tvi_photopic", "tvi_scotopic", "ward1994_scale"]
