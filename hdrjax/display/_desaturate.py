@@ -216,10 +216,17 @@ def _mapping(x: Array, L: Array, t: Array, L_max: Array) -> Array:
     images nor underflows for bright ones."""
     c = inverse_pow2(L_max)
     span = (L_max - t) * c
-    ok = span > 0
+    # a ramp narrower than the rounding of the luminance itself (a few ulps of L_max) is no
+    # ramp: a threshold at the maximum as another luminance routine computed it must leave
+    # the image as it is, not turn its brightest pixel grey
+    ok = span > 4 * jnp.finfo(x.dtype).eps * (L_max * c)
     s = jnp.where(ok, jnp.clip((L * c - t * c) / jnp.where(ok, span, 1.0), 0.0, 1.0), 0.0)
     xc = x * c
-    mean = ((xc[..., 0] + xc[..., 1] + xc[..., 2]) / 3.0)[..., None]
+    # the mean as the smallest channel plus the mean excess over it: exact for a grey
+    # pixel (whose (3 x) / 3 may round away from x), so grey pixels keep every bit
+    lo = jnp.min(xc, axis=-1, keepdims=True)
+    d = xc - lo
+    mean = lo + ((d[..., 0] + d[..., 1] + d[..., 2]) / 3.0)[..., None]
     # x itself unscaled: pixels below the threshold (s = 0) keep every bit, even those that
     # scaling would take below the smallest normal float
     return x - s[..., None] * ((xc - mean) / c)

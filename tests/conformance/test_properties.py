@@ -72,7 +72,8 @@ def test_auto_exposed_operators_are_scale_invariant(name):
 _images = hnp.arrays(
     np.float32,
     st.tuples(st.integers(1, 5), st.integers(1, 6), st.just(3)),
-    elements=st.floats(0.0, 1e4, width=32),
+    # normal floats: XLA:CPU flushes subnormal inputs to zero
+    elements=st.floats(0.0, 1e4, width=32, allow_subnormal=False),
 )
 
 

@@ -47,6 +47,8 @@ NOT_DIFFERENTIABLE = {
     "space": "budak2005: the colour-contrast model (a module, not a number)",
     "chromaticities": "budak2005: the file's primaries (a tuple fixed by the file)",
     "look": "agx: choice of ASC CDL look (string)",
+    "chroma": "reinhard2002: how colour is put back, ratio or ycbcr (string)",
+    "white": "reinhard2002: how L_white is estimated, JGT Eq. 5 or the maximum (string)",
     "compat": "choice of the peer whose departures from the paper are reproduced (string)",
 }
 
