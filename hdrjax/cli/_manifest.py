@@ -505,7 +505,7 @@ OPERATORS = (
             },
             {
                 "name": "exposure_bias",
-                "help": "multiplier of RGB before the curve",
+                "help": "multiplier of RGB before the curve (Hable's ExposureBias)",
                 "unit": "",
                 "default": "2",
                 "range": (0.0, inf),
@@ -517,7 +517,7 @@ OPERATORS = (
             },
             {
                 "name": "linear_whitepoint",
-                "help": "input value mapped to display white",
+                "help": "input value mapped to display white, W",
                 "unit": "image units",
                 "default": "11.2",
                 "range": (0.0, inf),

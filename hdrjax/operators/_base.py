@@ -29,6 +29,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
 from .._colour import REC709_WEIGHTS, luminance, luminance_weights
+from .._photometry import chroma_key
 from .._scale import ln_max
 from .._stats import (
     DEFAULT_BINS,
@@ -61,6 +62,20 @@ def weights_field(default: tuple[float, float, float] = REC709_WEIGHTS) -> Any:
         static=True,
         shape=(3,),
         converter=lambda w: tuple(float(v) for v in w),
+    )
+
+
+def chromaticities_field() -> Any:
+    """``chromaticities``: the image's primaries, for operators that need more of them than
+    the luminance weights (scotopic luminance, XYZ)."""
+    return parameter(
+        None,
+        help="the image's primaries, OpenEXR's 8 numbers (the command line takes them from"
+        " the file); None: Rec.709 with D65",
+        range="[0, 1]",
+        static=True,
+        shape=(8,),
+        converter=chroma_key,
     )
 
 

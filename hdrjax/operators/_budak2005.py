@@ -72,7 +72,6 @@ from .. import _check
 from .._photometry import (
     LMAX,
     LMIN,
-    chroma_key,
     mesopic_weight,
     tvi,
     weights_of,
@@ -85,6 +84,7 @@ from ._base import (
     Prepared,
     StatisticsSettings,
     checked_statistics,
+    chromaticities_field,
     estimated,
     fill,
     parameter,
@@ -330,15 +330,7 @@ class Budak2005(AbstractOperator):
         static=True,
         shape=None,
     )
-    chromaticities: tuple[float, ...] | None = parameter(
-        None,
-        help="the image's primaries, OpenEXR's 8 numbers (the command line takes them from"
-        " the file); None: Rec.709 with D65",
-        range="[0, 1]",
-        static=True,
-        shape=(8,),
-        converter=chroma_key,
-    )
+    chromaticities: tuple[float, ...] | None = chromaticities_field()
 
     @property
     def weights_(self) -> tuple[float, float, float]:

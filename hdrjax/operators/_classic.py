@@ -29,7 +29,6 @@ from ._base import (
     Prepared,
     StatisticsSettings,
     bound_stats,
-    checked_statistics,
     estimated,
     fill,
     max_luminance,
@@ -38,7 +37,12 @@ from ._base import (
     scale_by_luminance,
     weights_field,
 )
-from ._reinhard2005 import channel_average_field, luminance_range_fields, photoreceptor
+from ._reinhard2005 import (
+    channel_average_field,
+    fill_photoreceptor_statistics,
+    luminance_range_fields,
+    photoreceptor,
+)
 
 BANTERLE2011 = (
     "Banterle, Artusi, Debattista, Chalmers 2011, Advanced High Dynamic Range Imaging,"
@@ -327,15 +331,7 @@ class Reinhard2004(AbstractOperator):
     def bind(self, stats: Statistics | None) -> "Reinhard2004":
         if not self.unset():
             return self
-        stats = checked_statistics(self, stats)
-        st = stats.luminance_stats()
-        measured = {
-            "channel_average": stats.channel_average if self.channel_average is None else None,
-            "log_average": st.log_average,
-            "L_min": st.min,
-            "L_max": max_luminance(st),
-        }
-        return fill(self, **{k: v for k, v in measured.items() if getattr(self, k) is None})
+        return fill_photoreceptor_statistics(self, stats)
 
     def _apply(self, p: Prepared) -> Array:
         rgb = jnp.maximum(p.rgb, 0.0)
@@ -367,6 +363,31 @@ def hable(x: Array, A, B, C, D, E, F) -> Array:
     return jnp.where(big, r_big, r_small) - E / F
 
 
+_HABLE_PARAMETERS = {
+    "shoulder_strength": ("shoulder strength A", "[0, inf)", ""),
+    "linear_strength": ("linear strength B", "[0, inf)", ""),
+    "linear_angle": ("linear angle C", "[0, inf)", ""),
+    "toe_strength": ("toe strength D", "[0, inf)", ""),
+    "toe_numerator": ("toe numerator E", "[0, inf)", ""),
+    "toe_denominator": ("toe denominator F", "(0, inf)", ""),
+    "exposure_bias": ("multiplier of RGB before the curve (Hable's ExposureBias)", "(0, inf)", ""),
+    "linear_whitepoint": ("input value mapped to display white, W", "(0, inf)", "image units"),
+}
+
+
+def hable_parameter(name: str, default: float) -> Any:
+    """The field of Hable's parameter ``name`` (help, range and unit shared by the
+    operators built on :func:`hable`) with the operator's own ``default``."""
+    help, range, unit = _HABLE_PARAMETERS[name]
+    return parameter(default, help=help, unit=unit, range=range)
+
+
+def hable_curve(op: Any, rgb: Array) -> Array:
+    """``h(bias · max(RGB, 0)) / h(W)`` per channel with ``op``'s Hable parameters."""
+    k = tuple(getattr(op, n) for n in tuple(_HABLE_PARAMETERS)[:6])
+    return hable(jnp.maximum(rgb, 0.0) * op.exposure_bias, *k) / hable(op.linear_whitepoint, *k)
+
+
 @register("filmic")
 class Filmic(AbstractOperator):
     """Hable 2010 filmic curve per channel, normalised by its value at ``linear_whitepoint``
@@ -386,30 +407,17 @@ class Filmic(AbstractOperator):
     per_channel: ClassVar[bool] = True
     default_fit_params: ClassVar[tuple[str, ...]] = ("exposure_bias",)
 
-    shoulder_strength: Array = parameter(0.22, help="shoulder strength A", range="[0, inf)")
-    linear_strength: Array = parameter(0.3, help="linear strength B", range="[0, inf)")
-    linear_angle: Array = parameter(0.1, help="linear angle C", range="[0, inf)")
-    toe_strength: Array = parameter(0.2, help="toe strength D", range="[0, inf)")
-    toe_numerator: Array = parameter(0.01, help="toe numerator E", range="[0, inf)")
-    toe_denominator: Array = parameter(0.3, help="toe denominator F", range="(0, inf)")
-    exposure_bias: Array = parameter(
-        2.0, help="multiplier of RGB before the curve", range="(0, inf)"
-    )
-    linear_whitepoint: Array = parameter(
-        11.2, help="input value mapped to display white", unit="image units", range="(0, inf)"
-    )
+    shoulder_strength: Array = hable_parameter("shoulder_strength", 0.22)
+    linear_strength: Array = hable_parameter("linear_strength", 0.3)
+    linear_angle: Array = hable_parameter("linear_angle", 0.1)
+    toe_strength: Array = hable_parameter("toe_strength", 0.2)
+    toe_numerator: Array = hable_parameter("toe_numerator", 0.01)
+    toe_denominator: Array = hable_parameter("toe_denominator", 0.3)
+    exposure_bias: Array = hable_parameter("exposure_bias", 2.0)
+    linear_whitepoint: Array = hable_parameter("linear_whitepoint", 11.2)
 
     def _apply(self, p: Prepared) -> Array:
-        k = (
-            self.shoulder_strength,
-            self.linear_strength,
-            self.linear_angle,
-            self.toe_strength,
-            self.toe_numerator,
-            self.toe_denominator,
-        )
-        out = hable(jnp.maximum(p.rgb, 0.0) * self.exposure_bias, *k)
-        return out / hable(self.linear_whitepoint, *k)
+        return hable_curve(self, p.rgb)
 
 
 __all__ = [

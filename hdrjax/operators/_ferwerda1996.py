@@ -42,7 +42,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._colour import luminance_weights
-from .._photometry import chroma_key, scotopic_luminance
+from .._photometry import scotopic_luminance
 from .._stats import Statistics
 from .._thresholds import tvi_photopic, tvi_scotopic
 from ._base import (
@@ -50,6 +50,7 @@ from ._base import (
     Prepared,
     StatisticsSettings,
     bound_stats,
+    chromaticities_field,
     estimated,
     fill,
     max_luminance,
@@ -118,15 +119,7 @@ class Ferwerda1996(AbstractOperator):
         static=True,
         choices=COMPAT,
     )
-    chromaticities: tuple[float, ...] | None = parameter(
-        None,
-        help="the image's primaries, OpenEXR's 8 numbers (the command line takes them from"
-        " the file); None: Rec.709 with D65",
-        range="[0, 1]",
-        static=True,
-        shape=(8,),
-        converter=chroma_key,
-    )
+    chromaticities: tuple[float, ...] | None = chromaticities_field()
 
     def __check_init__(self):
         if self.compat not in COMPAT:

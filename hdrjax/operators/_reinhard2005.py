@@ -127,6 +127,20 @@ def luminance_range_fields() -> tuple[Any, Any]:
     return low, high
 
 
+def fill_photoreceptor_statistics(op: Any, stats: Statistics | None) -> Any:
+    """``op`` with those of ``channel_average``, ``log_average``, ``L_min`` and ``L_max``
+    that are ``None`` filled from ``stats`` (the photoreceptor operators' statistics)."""
+    stats = checked_statistics(op, stats)
+    st = stats.luminance_stats()
+    measured = {
+        "channel_average": stats.channel_average if op.channel_average is None else None,
+        "log_average": st.log_average,
+        "L_min": st.min,
+        "L_max": max_luminance(st),
+    }
+    return fill(op, **{k: v for k, v in measured.items() if getattr(op, k) is None})
+
+
 @register("reinhard2005")
 class Reinhard2005(AbstractOperator):
     """Reinhard & Devlin 2005 photoreceptor operator with pfstmo's parameters and defaults
@@ -251,15 +265,7 @@ class Reinhard2005(AbstractOperator):
         which are extremes of the *output*, are left to :meth:`measure` or the call."""
         if not self._unmeasured():
             return self
-        stats = checked_statistics(self, stats)
-        st = stats.luminance_stats()
-        values = {
-            "channel_average": stats.channel_average if self.channel_average is None else None,
-            "log_average": st.log_average,
-            "L_min": st.min,
-            "L_max": max_luminance(st),
-        }
-        op = fill(self, **{k: v for k, v in values.items() if getattr(self, k) is None})
+        op = fill_photoreceptor_statistics(self, stats)
         if op.m is None:
             op = fill(op, m=automatic_contrast(op.log_average, op.L_min, op.L_max))
         return op

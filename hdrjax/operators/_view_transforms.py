@@ -40,7 +40,7 @@ from jaxtyping import Array
 from .._colour import REC709_CHROMATICITIES, REC709_WEIGHTS, normalised_primary_matrix
 from .._scale import positive_power
 from ._base import AbstractOperator, Prepared, parameter, register, traced
-from ._classic import hable
+from ._classic import hable_curve, hable_parameter
 
 REC2020_CHROMATICITIES = (0.708, 0.292, 0.170, 0.797, 0.131, 0.046, 0.3127, 0.3290)
 """ITU-R BT.2020 primaries with the D65 white (AgX's working space)."""
@@ -419,30 +419,17 @@ class Hable2010(_AbstractViewTransform):
     )
 
     exposure: Array = _exposure()
-    shoulder_strength: Array = parameter(0.15, help="shoulder strength A", range="[0, inf)")
-    linear_strength: Array = parameter(0.50, help="linear strength B", range="[0, inf)")
-    linear_angle: Array = parameter(0.10, help="linear angle C", range="[0, inf)")
-    toe_strength: Array = parameter(0.20, help="toe strength D", range="[0, inf)")
-    toe_numerator: Array = parameter(0.02, help="toe numerator E", range="[0, inf)")
-    toe_denominator: Array = parameter(0.30, help="toe denominator F", range="(0, inf)")
-    exposure_bias: Array = parameter(
-        2.0, help="multiplier of RGB before the curve (Hable's ExposureBias)", range="(0, inf)"
-    )
-    linear_whitepoint: Array = parameter(
-        11.2, help="input value mapped to display white, W", unit="image units", range="(0, inf)"
-    )
+    shoulder_strength: Array = hable_parameter("shoulder_strength", 0.15)
+    linear_strength: Array = hable_parameter("linear_strength", 0.50)
+    linear_angle: Array = hable_parameter("linear_angle", 0.10)
+    toe_strength: Array = hable_parameter("toe_strength", 0.20)
+    toe_numerator: Array = hable_parameter("toe_numerator", 0.02)
+    toe_denominator: Array = hable_parameter("toe_denominator", 0.30)
+    exposure_bias: Array = hable_parameter("exposure_bias", 2.0)
+    linear_whitepoint: Array = hable_parameter("linear_whitepoint", 11.2)
 
     def _map(self, x: Array) -> Array:
-        k = (
-            self.shoulder_strength,
-            self.linear_strength,
-            self.linear_angle,
-            self.toe_strength,
-            self.toe_numerator,
-            self.toe_denominator,
-        )
-        out = hable(jnp.maximum(x, 0.0) * self.exposure_bias, *k)
-        return _unit(out / hable(self.linear_whitepoint, *k))
+        return _unit(hable_curve(self, x))
 
 
 # ----------------------------------------------------------------------------- Uchimura
