@@ -224,3 +224,26 @@ def test_every_operator_has_a_row_in_the_operator_table():
     }
     assert builtin - named == set(), "operators without a row"
     assert named - builtin == set(), "rows naming no operator"
+
+
+def test_the_gallery_shows_every_operator():
+    """``docs/gallery.jpg``, which the README shows, was made (``docs/gallery.py``) with every
+    built-in operator, one panel each: regenerate it when an operator is added."""
+    import json
+
+    from PIL import Image
+
+    import hdrjax
+
+    assert "(docs/gallery.jpg)" in README
+    record = json.loads((REPO / "docs" / "gallery.json").read_text())
+    builtin = [
+        n
+        for n in hdrjax.operator_names()
+        if hdrjax.get_operator(n).__module__.startswith("hdrjax.")
+    ]
+    assert record["operators"] == builtin
+    cols = 5
+    rows = -(-len(builtin) // cols)
+    w, h = Image.open(REPO / "docs" / "gallery.jpg").size
+    assert w == cols * 260 and h >= rows * 130, "the grid has one panel per operator"
