@@ -5,6 +5,7 @@ gradients overflowed. 8×8 and 16×16 images; each function compiled once or twi
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import hdrjax
 import hdrjax.filters as hf
@@ -87,6 +88,29 @@ def test_tumblin_power_saturates_below_the_float_maximum():
     L = np.asarray(hdrjax.luminance(out[1]))
     assert L[5, 7] == L.max() and L[5, 7] > 1e30
     assert np.all(np.isfinite(np.asarray(hdrjax.tonemap(lamp, "tumblin_reinhard"))))
+
+
+@pytest.mark.parametrize("name", ["tumblin1999", "tumblin_reinhard"])
+def test_tumblin_with_a_dim_display_adaptation(name):
+    """A display adaptation below 1 cd/m² makes ``m L_da`` small, and ``m`` itself huge near
+    the denominator's pole (``1.855 + 0.4 ln L_da = 0`` at 0.0097 cd/m²): a 3e38 lamp gave
+    +Inf at ``L_da = 1`` and every pixel NaN at ``L_da = 0.01``. Now the power law is one
+    exponential in logarithms, saturated below the float maximum: finite outputs, finite
+    gradients with respect to ``L_da`` (for a lamp within ``cases.GRAD_SCALES``), and a
+    value at or below the pole is refused naming ``L_da``."""
+    lamp = natural((8, 8))
+    lamp[5, 7] = BIG
+    for L_da in (1.0, 0.1, 0.02):
+        out = np.asarray(hdrjax.tonemap(lamp, name, L_da=L_da, L_wa=1e-3))
+        assert np.all(np.isfinite(out)), (name, L_da)
+    lamp[5, 7] = 1e10
+    g = jax.grad(lambda v: jnp.sum(hdrjax.make_operator(name, L_da=v, L_wa=1e-3)(lamp)))
+    for L_da in (1.0, 0.02):
+        assert np.isfinite(float(g(jnp.float32(L_da)))), (name, L_da)
+    with pytest.raises(ValueError, match=r"^L_da: expected a display adaptation above 0.00968"):
+        hdrjax.make_operator(name, L_da=0.005)
+    with pytest.raises(ValueError, match=r"^L_da: .* above 2.3e-05"):
+        hdrjax.make_operator(name, L_da=1e-5, gamma_log="log10")
 
 
 def test_log_average_of_an_image_at_the_float_maximum():

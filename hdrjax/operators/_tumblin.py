@@ -19,9 +19,11 @@ than the paper's typesetting, which is unverified; with ``log10`` the denominato
 ``γ_d`` itself for ``L_da ≤ 100``. ``gamma_log="log10"`` selects the other reading.
 """
 
+import math
 from typing import ClassVar, Literal
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array
 
 from .._scale import divide
@@ -36,6 +38,7 @@ from ._base import (
     parameter,
     register,
     safe_log,
+    traced,
     weights_field,
 )
 from ._reinhard2002 import reinhard_curve
@@ -66,22 +69,23 @@ def tumblin_curve(
     g_d = stevens_gamma(L_da)
     den = 1.855 + 0.4 * (jnp.log(L_da) if gamma_log == "ln" else jnp.log10(L_da))
     g_wd = g_w / den
-    m = jnp.power(C_max, (g_wd - 1.0) / 2.0)
-    return ratio_power(L_w, L_wa, g_w / g_d, m * L_da)
+    # m L_da in logarithms: C_max^((γ_wd − 1) / 2) overflows for a dim display adaptation
+    # (γ_wd grows as the denominator nears 0, at L_da ≈ 0.0097 cd/m² with ln)
+    ln_scale = (g_wd - 1.0) / 2.0 * jnp.log(C_max) + jnp.log(L_da)
+    return ratio_power(L_w, L_wa, g_w / g_d, ln_scale)
 
 
-def ratio_power(L_w: Array, L_wa: Array, exponent: Array, scale: Array) -> Array:
-    """``scale · (L_w / L_wa)^exponent`` for ``L_w ≥ 0`` (0 at ``L_w = 0``), the power law of
-    both Tumblin–Rushmeier operators, finite for every ``L_w`` of the float type when
-    ``scale ≥ 1`` (below, the saturated power itself may overflow: pass 1 and multiply)."""
+def ratio_power(L_w: Array, L_wa: Array, exponent: Array, ln_scale: Array) -> Array:
+    """``e^ln_scale · (L_w / L_wa)^exponent`` for ``L_w ≥ 0`` (0 at ``L_w = 0``), the power
+    law of both Tumblin–Rushmeier operators, evaluated as one exponential that saturates
+    1 % below the float maximum: finite for every ``L_w`` of the float type and every
+    scale (an exponent above 1, an adaptation brighter than the display's, or a large
+    scale would otherwise leave the float range; a no-op for every representable result)."""
     ratio = divide(jnp.maximum(L_w, 0.0), L_wa)  # no reciprocal of L_wa: it may be subnormal
     pos = ratio > 0
-    # an exponent above 1 (an adaptation brighter than the display's) takes the power out
-    # of the float range near the float maximum; it saturates 1 % below the maximum
-    # (finite, and a no-op for every representable result)
-    big = jnp.log(jnp.finfo(ratio.dtype).max) - 0.01 - jnp.log(scale)
-    powed = jnp.where(pos, jnp.exp(jnp.minimum(exponent * safe_log(ratio), big)), 0.0)
-    return scale * powed
+    big = jnp.log(jnp.finfo(ratio.dtype).max) - 0.01
+    ln_out = exponent * safe_log(ratio) + ln_scale
+    return jnp.where(pos, jnp.exp(jnp.minimum(ln_out, big)), 0.0)
 
 
 def adaptation_terms(stats: Statistics, method: str) -> tuple[Array, dict[str, Array]]:
@@ -149,6 +153,17 @@ class _AbstractTumblin(AbstractLuminanceCurve):
             raise ValueError(f"adaptation: expected one of {_ADAPT}, got {self.adaptation!r}")
         if self.gamma_log not in ("ln", "log10"):
             raise ValueError(f"gamma_log: expected 'ln' or 'log10', got {self.gamma_log!r}")
+        if traced(self):
+            return
+        # γ_wd's denominator 1.855 + 0.4 log(L_da) must be positive
+        pole = math.exp(-1.855 / 0.4) if self.gamma_log == "ln" else 10 ** (-1.855 / 0.4)
+        L_da = np.asarray(self.L_da)
+        if np.any(L_da <= pole):
+            raise ValueError(
+                f"L_da: expected a display adaptation above {pole:.3g} cd/m² (gamma_log"
+                f"={self.gamma_log!r}: 1.855 + 0.4 {self.gamma_log}(L_da) must be positive),"
+                f" got {', '.join(f'{v:.3g}' for v in L_da.ravel())}"
+            )
 
 
 @register("tumblin1999")

@@ -127,7 +127,7 @@ class TumblinRushmeier1993(AbstractLuminanceCurve):
         assert self.L_wa is not None
         exponent, n_a = tumblin_rushmeier1993_terms(self.L_wa, self.L_dmax, self.C_max)
         # n_a may be below 1: it multiplies the saturated power, not inside ratio_power
-        n = jnp.minimum(n_a * ratio_power(L, self.L_wa, exponent, 1.0), DISPLAY_CAP)
+        n = jnp.minimum(n_a * ratio_power(L, self.L_wa, exponent, 0.0), DISPLAY_CAP)
         return jnp.maximum(n - 1.0 / self.C_max, 0.0)
 
 
