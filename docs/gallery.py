@@ -8,7 +8,8 @@ user can choose an operator by looking::
 
 The image is ``data/rooitou_park_1k.hdr`` (a daylight panorama, Radiance units W/(sr·m²)),
 box-averaged to 256 × 128. Operators whose parameters are in cd/m² (``drago2003``'s display,
-``ward1994``, ``ferwerda1996``, the Tumblin–Rushmeier family, ``budak2005``) see it in
+``ward1994``, ``ferwerda1996``, the Tumblin–Rushmeier family, ``budak2005``, …) and the
+cone model ``vanhateren2006`` see it in
 cd/m² (× 179, Radiance's luminous efficacy); the others see it exposed so that its
 log-average luminance is 0.18 (middle grey), as a photographer or a renderer's exposure
 would set it. ``tabulated`` is given a three-point table (0.001 → 0, 0.18 → 0.18,
@@ -35,9 +36,14 @@ EFFICACY = 179.0  # cd/m² per W/(sr·m²)
 TABLE = {"luminance": [0.001, 0.18, 100.0], "display": [0.0, 0.18, 1.0]}
 
 
+ABSOLUTE = {"vanhateren2006"}
+"""Operators that take cd/m² without a parameter in cd/m² (the cone model's constants)."""
+
+
 def absolute(name: str) -> bool:
-    """Whether the operator's parameters are in cd/m² (its input is absolute luminance)."""
-    return any(i.unit == "cd/m²" for i in parameter_info(hdrjax.get_operator(name)))
+    """Whether the operator's input is absolute luminance: a parameter in cd/m²."""
+    info = parameter_info(hdrjax.get_operator(name))
+    return name in ABSOLUTE or any(i.unit == "cd/m²" for i in info)
 
 
 def load(factor: int = 4) -> np.ndarray:

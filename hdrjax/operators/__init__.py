@@ -44,11 +44,18 @@ from ._classic import (
 )
 from ._drago2003 import Drago2003 as Drago2003
 from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
+from ._kimkautz2008 import KimKautz2008 as KimKautz2008
 from ._linear import (
     Q_FACTOR as Q_FACTOR,
     Linear as Linear,
     ev100_luminance as ev100_luminance,
     saturation_luminance as saturation_luminance,
+)
+from ._mai2011 import Mai2011 as Mai2011
+from ._pattanaik2000 import (
+    AdaptationState as AdaptationState,
+    Pattanaik2000 as Pattanaik2000,
+    pattanaik2000_sequence as pattanaik2000_sequence,
 )
 from ._reinhard2002 import Reinhard2002 as Reinhard2002
 from ._reinhard2002_local import (
@@ -59,6 +66,7 @@ from ._reinhard2005 import Reinhard2005 as Reinhard2005
 from ._tabulated import Tabulated as Tabulated
 from ._tumblin import Tumblin1999 as Tumblin1999, TumblinReinhard as TumblinReinhard
 from ._tumblin_rushmeier1993 import TumblinRushmeier1993 as TumblinRushmeier1993
+from ._vanhateren2006 import VanHateren2006 as VanHateren2006
 from ._view_transforms import (
     AcesHill as AcesHill,
     AcesNarkowicz2015 as AcesNarkowicz2015,
@@ -69,3 +77,4 @@ from ._view_transforms import (
     Uchimura2017 as Uchimura2017,
 )
 from ._ward1994 import Ward1994 as Ward1994
+from ._ward1997 import Ward1997 as Ward1997

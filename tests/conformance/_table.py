@@ -757,6 +757,20 @@ CASES["batch.render_batch"] = Case(
 )
 
 
+# --- time-dependent adaptation: three frames (the image, half and a quarter as bright) -----
+def _pattanaik_sequence(x):
+    x = _cd(x)
+    frames = jnp.stack([x, x * 0.5, x * 0.25])
+    out = hdrjax.operators.pattanaik2000_sequence(frames, fps=16.0)[0]
+    return jnp.moveaxis(out, 0, -2)  # (H, W, frame, channel): per-pixel, as the checks read
+
+
+CASES["operators.pattanaik2000_sequence"] = Case(
+    _pattanaik_sequence,
+    ("hdrjax.operators.pattanaik2000_sequence", "hdrjax.operators.AdaptationState"),
+)
+
+
 def _report_numbers(report):
     """The numbers of a SceneReport (global statistics: finite with bad pixels excluded)."""
     vals = [
