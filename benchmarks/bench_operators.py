@@ -80,6 +80,8 @@ OPERATORS: tuple[Entry, ...] = (
         opencv=lambda cv2: cv2.createTonemapDrago(gamma=1.0, saturation=1.0, bias=0.85),
     ),
     Entry("reinhard2005", {"compat": "pfstmo"}, pfstmo="pfstmo_reinhard05"),
+    Entry("mai2011", {"compat": "pfstmo"}, pfstmo="pfstmo_mai11"),
+    Entry("pattanaik2000", {}, pfstmo="pfstmo_pattanaik00"),
 )
 
 
