@@ -236,7 +236,7 @@ def _histogram(L: Array, valid: Array | None, m: int) -> Array:
     return _blockwise(block, jnp.zeros(nb + 1, jnp.int32), *args)[0][:nb]
 
 
-def _bin_edges(m: int, dtype) -> tuple[Array, Array]:
+def bin_edges(m: int, dtype) -> tuple[Array, Array]:
     """``ln`` of the lower edge of every bin of the grid and of the next bin's (float32
     patterns ``b << (23 − m)``; the last upper edge is float32's max)."""
     nb = grid_size(m)
@@ -261,7 +261,7 @@ def _from_counts(counts: Array, qs: Array, lmin: Array, lmax: Array, m: int):
     """
     dt = lmin.dtype
     c = counts.at[: 1 << m].set(0)  # zero and subnormals
-    lo, hi = _bin_edges(m, dt)
+    lo, hi = bin_edges(m, dt)
     n = jnp.sum(c)
     cum = jnp.cumsum(c)
     rank = qs * jnp.maximum(n - 1, 0).astype(dt)
@@ -850,7 +850,7 @@ class Statistics(eqx.Module):
 def _range_log_average(st: Statistics, lo: float, hi: float) -> tuple[Array, Array]:
     """:meth:`Statistics.range_log_average` (histogram statistics)."""
     dt = st.min.dtype
-    e_lo, e_hi = _bin_edges(st.m, dt)
+    e_lo, e_hi = bin_edges(st.m, dt)
     centre = 0.5 * (e_lo + e_hi)
     inside = (centre > math.log(lo)) & (centre < math.log(hi))
     inside = inside & (jnp.arange(centre.shape[0]) >= (1 << st.m))  # not zero/subnormal

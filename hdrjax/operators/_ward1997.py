@@ -47,7 +47,7 @@ from jaxtyping import Array
 
 from .._photometry import tvi
 from .._scale import divide
-from .._stats import Statistics, _bin_edges
+from .._stats import Statistics, bin_edges
 from ._base import (
     AbstractLuminanceCurve,
     Prepared,
@@ -219,7 +219,7 @@ class Ward1997(AbstractLuminanceCurve):
         """The tone curve's table from the fixed-grid histogram (class docstring)."""
         dt = ln_min.dtype
         n = self.n_bins
-        lo, hi = _bin_edges(m, dt)
+        lo, hi = bin_edges(m, dt)
         centre = 0.5 * (lo + hi)
         idx = jnp.clip(jnp.floor((centre - ln_min) / span * n), 0, n - 1).astype(jnp.int32)
         fine = counts.at[: 1 << m].set(0).astype(dt)  # zero and subnormals: not counted
