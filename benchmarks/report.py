@@ -414,6 +414,55 @@ def render(results: dict[str, dict], plots: dict[str, Any] | None = None) -> str
     return "\n".join(lines).rstrip() + "\n"
 
 
+OPERATORS_BENCH = "operators"
+"""The benchmark whose records make the operator table (bench_operators.py)."""
+
+
+def operator_table(records: list[dict]) -> str | None:
+    """Every operator of the ``operators`` benchmark: hdrjax's warm time and compile time,
+    pfstmo's and OpenCV's times for the same paper where they have one, the ratio to
+    pfstmo and whether the issue's goal is met; ``None`` without such records."""
+    cases = group([r for r in records if r.get("benchmark") == OPERATORS_BENCH], "case")
+    rows = []
+    for (case,), recs in cases.items():
+        ours = next((r for r in recs if r["impl"] == "hdrjax" and "median_s" in r), None)
+        if ours is None:
+            continue
+
+        def peer(prefix: str, recs: list[dict] = recs) -> str:
+            r = next((r for r in recs if r["impl"].startswith(prefix)), None)
+            if r is None:
+                return ""
+            return "absent" if "median_s" not in r else fmt_ms(r["median_s"])
+
+        ex = ours.get("extra", {})
+        ratio = ex.get("ratio_vs_pfstmo")
+        goal = "" if "met" not in ex else f" ({'met' if ex['met'] else 'not met'}: {ex['goal']})"
+        rows.append(
+            [
+                f"`{case.split()[0]}`",
+                fmt_ms(ours["median_s"]),
+                fmt_num(ours.get("compile_s")),
+                peer("pfstmo"),
+                peer("OpenCV"),
+                "" if ratio is None else f"**{fmt_ratio(ratio)}**{goal}",
+            ]
+        )
+    if not rows:
+        return None
+    size = next(iter(cases))[0].split()[1]
+    return (
+        f"Every registered operator at {size} RGB float32 (warm; compile time apart), and"
+        " pfstmo's program of the same paper (its pipeline minus the same pipeline without"
+        " it) and OpenCV's where they have one:\n\n"
+        + _table(
+            ["operator", "hdrjax ms", "compile s", "pfstmo ms", "OpenCV ms", "hdrjax/pfstmo"],
+            rows,
+            ["---", "---:", "---:", "---:", "---:", "---"],
+        )
+    )
+
+
 def readme_section(results: dict[str, dict], readme_dir: Path, results_dir: Path) -> str:
     """The README performance section: date, machine, headline ratios, curve defaults."""
     link = os.path.relpath(results_dir / "REPORT.md", readme_dir).replace(os.sep, "/")
@@ -440,7 +489,9 @@ def readme_section(results: dict[str, dict], readme_dir: Path, results_dir: Path
     ]
     rat = {
         b: [
-            r for r in ratios(results[b]["records"]) if r["primary"] and r["benchmark"] != "scaling"
+            r
+            for r in ratios(results[b]["records"])
+            if r["primary"] and r["benchmark"] not in ("scaling", OPERATORS_BENCH)
         ]
         for b in backends
     }
@@ -487,6 +538,9 @@ def readme_section(results: dict[str, dict], readme_dir: Path, results_dir: Path
         rows.append(row)
     if rows:
         lines += [_table(header, rows, align), ""]
+    ops = operator_table(results[main]["records"])
+    if ops:
+        lines += [ops, ""]
     defaults = [
         (name, p)
         for name, pts in curves(results[main]["records"]).items()

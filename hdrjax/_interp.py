@@ -1,4 +1,5 @@
-"""Linear interpolation shared by the resamplers (panoramas, the vision effects' upsampling).
+"""Linear interpolation shared by the resamplers (panoramas, the vision effects' upsampling)
+and the tabulated tone curves (:func:`table_lerp`).
 
 A blend ``a (1 - f) + b f`` with ``0 ≤ f ≤ 1`` lies between ``a`` and ``b``, but its
 rounded terms can add up past the largest float when both neighbours are near it: a
@@ -33,4 +34,26 @@ def lerp(a: Array, b: Array, f: ArrayLike) -> Array:
     return jnp.where(f == 0, a, jnp.where(f == 1, b, r))
 
 
-__all__ = ["lerp"]
+def table_lerp(table: Array, u: Array) -> Array:
+    """Values of a uniform table at fractional positions ``u``: linear between nodes,
+    ``table[i] + f (table[i + 1] − table[i])`` with ``i = ⌊u⌋``, ``f = u − i``; ``u`` is
+    clipped to ``[0, n − 1]`` (``n = len(table) ≥ 2``), so the ends extend flat.
+
+    The indices are in range by construction, and NaN positions convert to index 0 (XLA's
+    float-to-integer conversion saturates, and its gather clamps): the lookups are gathers
+    without the out-of-range masking of JAX's default indexing, which cost about twice the
+    rest of a tone curve on the CPU. The result at a NaN position is NaN (``f`` is).
+    Gradients: with respect to ``table``, the interpolation weights; with respect to ``u``,
+    the segment's slope (0 outside ``[0, n − 1]``).
+    """
+    n = table.shape[0]
+    u = jnp.clip(u, 0.0, float(n - 1))
+    i = jnp.minimum(jnp.floor(u), float(n - 2))
+    f = u - i
+    k = i.astype(jnp.int32)
+    a = table.at[k].get(mode="promise_in_bounds")
+    b = table.at[k + 1].get(mode="promise_in_bounds")
+    return a + f * (b - a)
+
+
+__all__ = ["lerp", "table_lerp"]

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from .._interp import table_lerp
 from .._srgb import srgb_decode
 from .._stats import Statistics, grid_size
 from ._base import (
@@ -181,12 +182,7 @@ class Mai2011(AbstractOperator):
         assert self.curve is not None
         rgb = p.rgb
         x = jnp.log10(jnp.maximum(rgb, jnp.asarray(FLOOR, rgb.dtype)))
-        u = (x - LOG_MIN) / BIN_WIDTH
-        i = jnp.clip(jnp.floor(u), 0, BINS - 1)
-        t = jnp.clip(u - i, 0.0, 1.0)
-        curve = self.curve.astype(rgb.dtype)
-        k = i.astype(jnp.int32)
-        v = curve[k] + t * (curve[k + 1] - curve[k])
+        v = table_lerp(self.curve.astype(rgb.dtype), (x - LOG_MIN) / BIN_WIDTH)
         return srgb_decode(v).astype(rgb.dtype)
 
 

@@ -45,6 +45,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
+from .._interp import table_lerp
 from .._photometry import tvi
 from .._scale import divide
 from .._stats import Statistics, bin_edges
@@ -260,10 +261,7 @@ class Ward1997(AbstractLuminanceCurve):
         k = cdf.shape[-1] - 1
         span = self._span(self.L_min, self.L_max).astype(dt)
         ln_min = (jnp.log(self.L_min) - jnp.log(self.L_max)).astype(dt)  # ln(L_min / L_max)
-        u = jnp.clip((jnp.log(x) - ln_min) / span * k, 0.0, float(k))
-        i = jnp.minimum(jnp.floor(u), k - 1).astype(jnp.int32)
-        f = u - i.astype(dt)
-        P = cdf[i] + f * (cdf[i + 1] - cdf[i])
+        P = table_lerp(cdf, (jnp.log(x) - ln_min) / span * k)
         ln_r = jnp.log(self.L_dmin / self.L_dmax).astype(dt)  # ≤ 0
         rel = jnp.exp((1.0 - P) * ln_r)  # L_d / L_dmax
         r = jnp.exp(ln_r)
