@@ -34,15 +34,21 @@ def lerp(a: Array, b: Array, f: ArrayLike) -> Array:
     return jnp.where(f == 0, a, jnp.where(f == 1, b, r))
 
 
+def take(table: Array, k: Array) -> Array:
+    """``table[k]`` for integer indices ``k`` in range by construction: a gather without
+    the out-of-range masking of JAX's default indexing (which costs about twice the rest of
+    a tone curve on the CPU); an index out of range would be clamped by XLA's gather."""
+    return table.at[k].get(mode="promise_in_bounds")
+
+
 def table_lerp(table: Array, u: Array) -> Array:
     """Values of a uniform table at fractional positions ``u``: linear between nodes,
     ``table[i] + f (table[i + 1] − table[i])`` with ``i = ⌊u⌋``, ``f = u − i``; ``u`` is
     clipped to ``[0, n − 1]`` (``n = len(table) ≥ 2``), so the ends extend flat.
 
     The indices are in range by construction, and NaN positions convert to index 0 (XLA's
-    float-to-integer conversion saturates, and its gather clamps): the lookups are gathers
-    without the out-of-range masking of JAX's default indexing, which cost about twice the
-    rest of a tone curve on the CPU. The result at a NaN position is NaN (``f`` is).
+    float-to-integer conversion saturates, and its gather clamps), so the lookups use
+    :func:`take`. The result at a NaN position is NaN (``f`` is).
     Gradients: with respect to ``table``, the interpolation weights; with respect to ``u``,
     the segment's slope (0 outside ``[0, n − 1]``).
     """
@@ -51,9 +57,8 @@ def table_lerp(table: Array, u: Array) -> Array:
     i = jnp.minimum(jnp.floor(u), float(n - 2))
     f = u - i
     k = i.astype(jnp.int32)
-    a = table.at[k].get(mode="promise_in_bounds")
-    b = table.at[k + 1].get(mode="promise_in_bounds")
+    a, b = take(table, k), take(table, k + 1)
     return a + f * (b - a)
 
 
-__all__ = ["lerp", "table_lerp"]
+__all__ = ["lerp", "table_lerp", "take"]

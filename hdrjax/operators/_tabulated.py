@@ -23,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .._interp import take
 from ._base import AbstractLuminanceCurve, Prepared, parameter, register, weights_field
 
 
@@ -94,14 +95,14 @@ def interpolate(L: Array, luminance: Array, display: Array, method: str = "pchip
     t = jnp.log10(jnp.where(pos, L, luminance[0]))
     tc = jnp.clip(t, x[0], x[-1])
     k = jnp.clip(jnp.searchsorted(x, tc, side="right", method="compare_all") - 1, 0, x.shape[0] - 2)
-    x0, x1, y0, y1 = x[k], x[k + 1], y[k], y[k + 1]
+    x0, x1, y0, y1 = take(x, k), take(x, k + 1), take(y, k), take(y, k + 1)
     h = x1 - x0
     s = (tc - x0) / h
     if method == "linear":
         v = y0 + s * (y1 - y0)
     else:
         m = pchip_slopes(x, y)
-        m0, m1 = m[k], m[k + 1]
+        m0, m1 = take(m, k), take(m, k + 1)
         s2, s3 = s * s, s * s * s
         v = (
             (2 * s3 - 3 * s2 + 1) * y0
