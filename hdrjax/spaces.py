@@ -31,7 +31,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from . import _check
-from ._colour import REC709_CHROMATICITIES, normalised_primary_matrix
+from ._colour import REC709_CHROMATICITIES, apply_matrix, normalised_primary_matrix
 from ._scale import saturate_finite
 
 DEFAULT_SPACE = "sRGB"
@@ -256,10 +256,7 @@ def convert(
     m = jnp.asarray(matrix, x.dtype)
     if m.shape != (3, 3):
         raise ValueError(f"matrix: expected a 3×3 matrix, got shape {m.shape}")
-    # as scaled slices, not a dot: XLA:CPU fuses these into the consumer (the operator's
-    # pass), where a dot writes the converted image out first
-    r, g, b = x[..., 0:1], x[..., 1:2], x[..., 2:3]
-    y = jnp.concatenate([r * m[i, 0] + g * m[i, 1] + b * m[i, 2] for i in range(3)], axis=-1)
+    y = apply_matrix(x, m)
     return saturate_finite(y, x) if saturate else y
 
 

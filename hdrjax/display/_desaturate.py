@@ -51,7 +51,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._colour import luminance
+from .._colour import channel_min, luminance
 from .._scale import inverse_pow2
 from .._stats import DEFAULT_BINS, Statistics, percentile, summarise, summarise_histogram
 from ..operators._base import as_float_image
@@ -224,7 +224,7 @@ def _mapping(x: Array, L: Array, t: Array, L_max: Array) -> Array:
     xc = x * c
     # the mean as the smallest channel plus the mean excess over it: exact for a grey
     # pixel (whose (3 x) / 3 may round away from x), so grey pixels keep every bit
-    lo = jnp.min(xc, axis=-1, keepdims=True)
+    lo = channel_min(xc, keepdims=True)
     d = xc - lo
     mean = lo + ((d[..., 0] + d[..., 1] + d[..., 2]) / 3.0)[..., None]
     # x itself unscaled: pixels below the threshold (s = 0) keep every bit, even those that

@@ -47,6 +47,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check, spaces
+from .._colour import channel_max
 from .._scale import positive_power
 from .._srgb import clip_unit, srgb_decode, srgb_encode
 from ..spaces import SpaceLike
@@ -102,7 +103,7 @@ def _pq_scene(
     """Scene-referred RGB (display primaries) to PQ: reference white at 203 cd/m², the
     brightest channel of each pixel through the BT.2390 EETF, all three scaled alike."""
     rgb = map_gamut(rgb, method, weights, None)
-    hi = jnp.max(rgb, axis=-1)
+    hi = channel_max(rgb)
     if finite is not None:
         # Inf pixels are not the source range: they clip to the peak (sanitised to 1e30)
         scene_max = jnp.max(jnp.where(finite, hi, 0.0), axis=_image_axes(hi.ndim), keepdims=True)

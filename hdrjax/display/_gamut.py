@@ -63,7 +63,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._colour import REC709_WEIGHTS
+from .._colour import REC709_WEIGHTS, channel_max, channel_min
 
 GamutMethod = Literal["clip", "luminance", "compress"]
 GAMUT_METHODS: tuple[str, ...] = ("clip", "luminance", "compress")
@@ -122,7 +122,7 @@ def _vector(values: Sequence[float], like: Array) -> Array:
 def _towards_luminance(rgb: Array, weights: Sequence[float]) -> Array:
     y = rgb @ jnp.asarray(weights, rgb.dtype)
     y = y[..., None]
-    lo = jnp.min(rgb, axis=-1, keepdims=True)
+    lo = channel_min(rgb, keepdims=True)
     move = (lo < 0) & (y > 0)
     # Y + t (c − Y) with t = Y / (Y − min), which puts the smallest channel on 0, written
     # as t (c − min): no cancellation (t is within an ulp of 1 for a bright colour with a
@@ -134,7 +134,7 @@ def _towards_luminance(rgb: Array, weights: Sequence[float]) -> Array:
 
 
 def _compress(rgb: Array) -> Array:
-    ach = jnp.max(rgb, axis=-1, keepdims=True)
+    ach = channel_max(rgb, keepdims=True)
     gap = ach - rgb
     near = (ach > 0) & (gap <= _MAX_DISTANCE * ach)
     dist = jnp.where(near, gap / jnp.where(near, ach, 1.0), _MAX_DISTANCE)
@@ -154,7 +154,7 @@ def fit_below(rgb: Array, upper: float | None, *, clip: bool) -> Array:
     if upper is None:
         return jnp.maximum(rgb, 0.0)
     if not clip:
-        hi = jnp.max(rgb, axis=-1, keepdims=True)
+        hi = channel_max(rgb, keepdims=True)
         over = hi > upper
         rgb = rgb * jnp.where(over, upper / jnp.where(over, hi, 1.0), 1.0)
     # also takes up the rounding of the scaling and of the move towards grey (≈ 1 ulp)

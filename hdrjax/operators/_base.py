@@ -470,6 +470,12 @@ class AbstractOperator(eqx.Module):
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
     the output (so a fit need not measure it). Parameters not listed count as used."""
 
+    def __check_init__(self):
+        # every setting that is a name (compat, ceiling, look, chroma, …) is one of the
+        # choices it declares: one check and one message for all operators
+        for info in _named_settings(type(self)):
+            info.check(getattr(self, info.name), self.name)
+
     def statistics_settings(self) -> StatisticsSettings | None:
         """The statistics :meth:`bind` reads (``None``, the default: none, e.g. when every
         parameter is given)."""
@@ -780,6 +786,12 @@ def required_parameters(cls: type[AbstractOperator]) -> tuple[str, ...]:
         for f in dataclasses.fields(cls)
         if f.init and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
     )
+
+
+@functools.cache
+def _named_settings(cls: type[AbstractOperator]) -> tuple[ParameterInfo, ...]:
+    """The parameters of ``cls`` declared with ``choices``."""
+    return tuple(i for i in parameter_info(cls) if i.choices is not None)
 
 
 def parameter_info(cls: type[AbstractOperator] | AbstractOperator) -> tuple[ParameterInfo, ...]:

@@ -69,6 +69,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
+from .._colour import channel_min
 from .._photometry import (
     LMAX,
     LMIN,
@@ -405,7 +406,7 @@ def _roll_off_to_white(rgb: Array, Y: Array) -> Array:
     over = (rgb > 1.0) & (Yc < 1.0)
     # the largest s in [0, 1] with Y + s (c - Y) <= 1 for every channel c (c > 1 > Y)
     room = jnp.where(over, rgb - Yc, 1.0)
-    s = jnp.min(jnp.where(over, (1.0 - Yc) / room, 1.0), axis=-1, keepdims=True)
+    s = channel_min(jnp.where(over, (1.0 - Yc) / room, 1.0), keepdims=True)
     return jnp.where(Yc < 1.0, Yc + s * (rgb - Yc), 1.0)
 
 

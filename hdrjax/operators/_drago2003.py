@@ -116,10 +116,6 @@ class Drago2003(AbstractLuminanceCurve):
     )
     weights: tuple[float, float, float] = weights_field()
 
-    def __check_init__(self):
-        if self.compat not in ("paper", "pfstmo"):
-            raise ValueError(f"compat: expected 'paper' or 'pfstmo', got {self.compat!r}")
-
     def statistics_settings(self) -> StatisticsSettings | None:
         return StatisticsSettings(delta=self.delta) if self.unset() else None
 

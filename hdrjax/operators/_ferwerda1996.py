@@ -121,10 +121,6 @@ class Ferwerda1996(AbstractOperator):
     )
     chromaticities: tuple[float, ...] | None = chromaticities_field()
 
-    def __check_init__(self):
-        if self.compat not in COMPAT:
-            raise ValueError(f"compat: expected one of {', '.join(COMPAT)}, got {self.compat!r}")
-
     @property
     def weights_(self) -> tuple[float, float, float]:
         return luminance_weights(self.chromaticities)

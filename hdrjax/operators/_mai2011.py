@@ -161,8 +161,6 @@ class Mai2011(AbstractOperator):
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
-        if self.compat not in ("paper", "pfstmo"):
-            raise ValueError(f"compat: expected 'paper' or 'pfstmo', got {self.compat!r}")
         if self.curve is not None and self.curve.shape != (NODES,):
             raise ValueError(
                 f"curve: expected {NODES} values (log10 L = -6 … 9 in steps of 0.1), got"

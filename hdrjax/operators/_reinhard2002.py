@@ -53,7 +53,6 @@ from jaxtyping import Array
 from .._scale import ln_max, scale
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
 from ._base import (
-    CHROMA,
     AbstractLuminanceCurve,
     StatisticsSettings,
     bound_stats,
@@ -303,14 +302,6 @@ class Reinhard2002(AbstractLuminanceCurve):
                 self.white, self.L_white = "max", None
             else:
                 self.L_white = param(math.inf)
-
-    def __check_init__(self):
-        if self.white not in WHITE_METHODS:
-            raise ValueError(
-                f"white: expected one of {' | '.join(WHITE_METHODS)}, got {self.white!r}"
-            )
-        if self.chroma not in CHROMA:
-            raise ValueError(f"chroma: expected one of {' | '.join(CHROMA)}, got {self.chroma!r}")
 
     def statistics_settings(self) -> StatisticsSettings | None:
         return jgt_settings(self)

@@ -248,10 +248,6 @@ class Reinhard2005(AbstractOperator):
         "L_max",
     )
 
-    def __check_init__(self):
-        if self.compat not in ("paper", "pfstmo"):
-            raise ValueError(f"compat: expected 'paper' or 'pfstmo', got {self.compat!r}")
-
     def _unmeasured(self) -> tuple[str, ...]:
         return tuple(n for n in self._STATISTICS if getattr(self, n) is None)
 

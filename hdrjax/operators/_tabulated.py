@@ -156,10 +156,6 @@ class Tabulated(AbstractLuminanceCurve):
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
-        if self.interpolation not in ("pchip", "linear"):
-            raise ValueError(
-                f"interpolation: expected 'pchip' or 'linear', got {self.interpolation!r}"
-            )
         if self.luminance.ndim != 1 or self.display.ndim != 1:
             raise ValueError("tabulated: luminance and display must be 1-D tables")
         try:

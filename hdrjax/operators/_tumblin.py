@@ -149,10 +149,6 @@ class _AbstractTumblin(AbstractLuminanceCurve):
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
-        if self.adaptation not in _ADAPT:
-            raise ValueError(f"adaptation: expected one of {_ADAPT}, got {self.adaptation!r}")
-        if self.gamma_log not in ("ln", "log10"):
-            raise ValueError(f"gamma_log: expected 'ln' or 'log10', got {self.gamma_log!r}")
         if traced(self):
             return
         # γ_wd's denominator 1.855 + 0.4 log(L_da) must be positive

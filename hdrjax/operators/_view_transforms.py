@@ -37,7 +37,15 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._colour import REC709_CHROMATICITIES, REC709_WEIGHTS, normalised_primary_matrix
+from .._colour import (
+    REC709_CHROMATICITIES,
+    REC709_WEIGHTS,
+    apply_matrix,
+    channel_max,
+    channel_min,
+    luminance,
+    normalised_primary_matrix,
+)
 from .._scale import positive_power
 from ._base import AbstractOperator, Prepared, parameter, register, traced
 from ._classic import hable_curve, hable_parameter
@@ -54,11 +62,6 @@ def _exposed(rgb: Array, exposure: Array) -> Array:
     """``rgb · 2^exposure``, clamped to the dtype's finite range."""
     top = jnp.finfo(rgb.dtype).max
     return jnp.clip(rgb * jnp.exp2(exposure).astype(rgb.dtype), -top, top)
-
-
-def _apply_matrix(m: np.ndarray, x: Array) -> Array:
-    """``m @ pixel`` for every pixel of ``x`` (channels last)."""
-    return jnp.einsum("ij,...j->...i", jnp.asarray(m, x.dtype), x)
 
 
 def _rational(x: Array, num: tuple, den: tuple) -> Array:
@@ -188,8 +191,8 @@ class AcesHill(_AbstractViewTransform):
     exposure: Array = _exposure()
 
     def _map(self, x: Array) -> Array:
-        v = jnp.maximum(_apply_matrix(HILL_INPUT, x), 0.0)
-        return _unit(_apply_matrix(HILL_OUTPUT, _rational(v, *HILL_FIT)))
+        v = jnp.maximum(apply_matrix(x, HILL_INPUT), 0.0)
+        return _unit(apply_matrix(_rational(v, *HILL_FIT), HILL_OUTPUT))
 
 
 # ----------------------------------------------------------------------------- AgX
@@ -245,7 +248,7 @@ def _agx_look(v: Array, look: str) -> Array:
     if look == "none":
         return v
     slope, power, sat = AGX_LOOKS[look]
-    luma = jnp.einsum("...j,j->...", v, jnp.asarray(REC709_WEIGHTS, v.dtype))[..., None]
+    luma = luminance(v, REC709_WEIGHTS)[..., None]
     sv = v * jnp.asarray(slope, v.dtype).reshape((1,) * (v.ndim - 1) + (3,))
     pos = sv > 0  # (the published pow is undefined below 0: the sigmoid dips to -0.0023)
     cdl = jnp.where(pos, positive_power(jnp.where(pos, sv, 1.0), power), 0.0)
@@ -315,13 +318,13 @@ class AgX(_AbstractViewTransform):
     )
 
     def _map(self, x: Array) -> Array:
-        v = jnp.maximum(_apply_matrix(REC709_TO_REC2020, x), 0.0)
-        v = jnp.log2(jnp.maximum(_apply_matrix(AGX_INSET, v), 1e-10))
+        v = jnp.maximum(apply_matrix(x, REC709_TO_REC2020), 0.0)
+        v = jnp.log2(jnp.maximum(apply_matrix(v, AGX_INSET), 1e-10))
         v = _agx_sigmoid(_unit((v - AGX_MIN_EV) / (AGX_MAX_EV - AGX_MIN_EV)))
-        v = _apply_matrix(AGX_OUTSET, _agx_look(v, self.look))
+        v = apply_matrix(_agx_look(v, self.look), AGX_OUTSET)
         pos = v > 0
         v = jnp.where(pos, positive_power(jnp.where(pos, v, 1.0), 2.2), 0.0)
-        return _unit(_apply_matrix(REC2020_TO_REC709, v))
+        return _unit(apply_matrix(v, REC2020_TO_REC709))
 
 
 # ----------------------------------------------------------------------------- PBR Neutral
@@ -371,10 +374,10 @@ class PbrNeutral(_AbstractViewTransform):
 
     def _map(self, x: Array) -> Array:
         c = jnp.maximum(x, 0.0)
-        low = jnp.min(c, axis=-1, keepdims=True)
+        low = channel_min(c, keepdims=True)
         offset = jnp.where(low < 2 * PBR_F90, low - low * low / (4 * PBR_F90), PBR_F90)
         c = c - offset
-        peak = jnp.max(c, axis=-1, keepdims=True)
+        peak = channel_max(c, keepdims=True)
         ks, kd = self.start_compression, self.desaturation
         compress = peak >= ks
         p = jnp.where(compress, peak, 1.0)  # the other branch must not divide by p + 1 - 2 K_s

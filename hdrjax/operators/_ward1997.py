@@ -181,10 +181,6 @@ class Ward1997(AbstractLuminanceCurve):
     weights: tuple[float, float, float] = weights_field()
 
     def __check_init__(self):
-        if self.compat not in ("paper", "hdrtoolbox"):
-            raise ValueError(f"compat: expected 'paper' or 'hdrtoolbox', got {self.compat!r}")
-        if self.ceiling not in ("linear", "human"):
-            raise ValueError(f"ceiling: expected 'linear' or 'human', got {self.ceiling!r}")
         if self.n_bins < 2:
             raise ValueError(f"n_bins: expected an integer of at least 2, got {self.n_bins}")
         if not traced(self.L_dmin, self.L_dmax) and not bool(jnp.all(self.L_dmin < self.L_dmax)):

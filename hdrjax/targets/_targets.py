@@ -29,7 +29,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import _check
-from .._colour import REC709_WEIGHTS, luminance
+from .._colour import REC709_WEIGHTS, apply_matrix, luminance
 from .._stats import percentile_by_selection, selection_range
 from ..display import srgb_encode
 
@@ -261,7 +261,7 @@ def _lab(rgb: Array) -> Array:
         rgb.dtype,
     )
     white = jnp.asarray([0.95047, 1.0, 1.08883], rgb.dtype)
-    xyz = jnp.einsum("ij,...j->...i", m, rgb) / white.reshape((1,) * (rgb.ndim - 1) + (3,))
+    xyz = apply_matrix(rgb, m) / white.reshape((1,) * (rgb.ndim - 1) + (3,))
     d = 6.0 / 29.0
     pos = xyz > d**3
     f = jnp.where(pos, jnp.cbrt(jnp.where(pos, xyz, 1.0)), xyz / (3 * d * d) + 4.0 / 29.0)

@@ -210,10 +210,10 @@ def test_operators_lists_every_operator_and_one_operators_parameters(capsys):
 
 
 def test_operators_unknown_name_exits_2(capsys):
-    assert main(["operators", "durand2002"]) == 2
+    assert main(["operators", "nosuch2002"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
-    assert "unknown operator 'durand2002'; valid: aces_hill, aces_narkowicz2015" in err
+    assert "unknown operator 'nosuch2002'; valid: aces_hill, aces_narkowicz2015" in err
 
 
 def _reinhard2004(rgb, weights, a):

@@ -49,6 +49,25 @@ def test_every_parameter_is_described(name):
         assert p in fields and not fields[p].static, f"{name}: fits {p}"
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_named_settings_refuse_other_names(name):
+    """A setting declared with choices (compat, ceiling, look, …) refuses any other name
+    when the class is constructed directly, as ``make_operator`` does: one message naming
+    the setting, the operator and its choices."""
+    cls = get_operator(name)
+    required = {"luminance": [0.01, 1.0, 100.0], "display": [0.0, 0.5, 1.0]}
+    needed = {i.name: required[i.name] for i in parameter_info(cls) if i.required}
+    for info in parameter_info(cls):
+        if info.choices is None:
+            continue
+        with pytest.raises(ValueError) as e:
+            cls(**needed, **{info.name: "not-a-choice"})
+        msg = str(e.value)
+        assert msg.startswith(f"{info.name}: expected one of "), msg
+        assert all(c in msg for c in info.choices) and f"({name}" in msg, msg
+        assert "\n" not in msg
+
+
 def test_declarations_that_other_modules_read():
     """Not vacuous: the values the CLI, fit, batch and tiles used to keep in their own
     tables (the issue's OPTION_PARAMS, DEFAULT_PARAMS, ESTIMATING, AUTO_EXPOSED)."""
