@@ -17,16 +17,16 @@ Luminance below ``10^-5`` (black and negative pixels included) counts as ``10^-5
 pixels at or above ``10^9`` are left out of the histogram (pfstmo's range).
 """
 
+import math
 from typing import ClassVar, Literal
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array
 
 from .._interp import table_lerp
 from .._srgb import srgb_decode
-from .._stats import Statistics, grid_size
+from .._stats import Statistics, coarse_counts
 from ._base import (
     AbstractOperator,
     Prepared,
@@ -56,36 +56,24 @@ NODES = BINS + 1
 """Nodes of the tone curve, at ``log10 L = LOG_MIN + k δ``, ``k = 0 … BINS``."""
 
 
-def _edge_bins(m: int) -> np.ndarray:
-    """For each node ``10^(LOG_MIN + k δ)``, the index of the fixed statistics grid's bin
-    edge nearest to it in ``ln`` (grid of ``m`` mantissa bits: bin ``b`` starts at the
-    float32 of bit pattern ``b << (23 − m)``)."""
-    edges = np.float32(10.0) ** (LOG_MIN + BIN_WIDTH * np.arange(NODES)).astype(np.float32)
-    b = edges.view(np.uint32) >> np.uint32(23 - m)
-    lo = (b << np.uint32(23 - m)).view(np.float32).astype(np.float64)
-    hi = ((b + 1) << np.uint32(23 - m)).view(np.float32).astype(np.float64)
-    upper = edges.astype(np.float64) ** 2 > lo * hi  # above the bin's geometric centre
-    return (b + upper).astype(np.int64)
-
-
 def histogram(stats: Statistics) -> Array:
     """Pixel counts of pfstmo's ``BINS`` bins of ``log10 L`` from the mergeable statistics.
 
-    Bin ``k`` holds the fixed grid's bins between the grid edges nearest to its own edges
-    (:func:`_edge_bins`): a grid bin is a factor ``1 + 2^-m`` wide (``2^-10`` by default),
-    about 1/340 of pfstmo's bins, so at most the pixels of one grid bin at each edge land in
-    the neighbouring bin. Finite pixels below :data:`FLOOR` (their count: finite pixels less
-    those at or above it) go to the floor's bin, as pfstmo puts them at ``log10 L = −5``.
+    The fixed grid's bins regrouped (:func:`~hdrjax._stats.coarse_counts`): a grid bin is a
+    factor ``1 + 2^-m`` wide (``2^-10`` by default), about 1/340 of pfstmo's bins, so at
+    most the pixels of one grid bin at each edge land in the neighbouring bin. Every finite
+    pixel below :data:`FLOOR` (zero and negative ones included) counts in the floor's bin, as
+    pfstmo puts them at ``log10 L = −5``; those at or above ``10^9`` are left out.
     """
     assert stats.counts is not None and stats.m is not None
-    counts = jax.lax.stop_gradient(stats.counts)
-    cum = jnp.concatenate([jnp.zeros(1, counts.dtype), jnp.cumsum(counts)])
-    at = jnp.asarray(np.minimum(_edge_bins(stats.m), grid_size(stats.m)))
-    h = jnp.diff(cum[at]).astype(jnp.result_type(float))
-    floor_bin = int(round((np.log10(FLOOR) - LOG_MIN) / BIN_WIDTH))
-    above_floor = cum[-1] - cum[at[floor_bin]]
-    below = jnp.maximum(stats.n_finite - above_floor, 0).astype(h.dtype)
-    return h.at[floor_bin].add(jax.lax.stop_gradient(below))
+    ln10 = math.log(10.0)
+    # one more bin above 10^9 to hold the pixels left out
+    h = coarse_counts(
+        stats.counts, stats.m, LOG_MIN * ln10, (BINS + 1) * BIN_WIDTH * ln10, BINS + 1
+    )
+    floor_bin = int(round((math.log10(FLOOR) - LOG_MIN) / BIN_WIDTH))
+    below = jnp.maximum(jax.lax.stop_gradient(stats.n_finite) - jnp.sum(h[floor_bin:]), 0)
+    return jnp.zeros_like(h[:BINS]).at[floor_bin:].set(h[floor_bin:BINS]).at[floor_bin].add(below)
 
 
 def tone_curve(h: Array, compat: str = "paper") -> Array:

@@ -48,7 +48,7 @@ from jaxtyping import Array
 from .._interp import table_lerp
 from .._photometry import tvi
 from .._scale import divide
-from .._stats import Statistics, bin_edges
+from .._stats import Statistics, coarse_counts
 from ._base import (
     AbstractLuminanceCurve,
     Prepared,
@@ -216,11 +216,7 @@ class Ward1997(AbstractLuminanceCurve):
         """The tone curve's table from the fixed-grid histogram (class docstring)."""
         dt = ln_min.dtype
         n = self.n_bins
-        lo, hi = bin_edges(m, dt)
-        centre = 0.5 * (lo + hi)
-        idx = jnp.clip(jnp.floor((centre - ln_min) / span * n), 0, n - 1).astype(jnp.int32)
-        fine = counts.at[: 1 << m].set(0).astype(dt)  # zero and subnormals: not counted
-        hist = jax.ops.segment_sum(fine, idx, num_segments=n)
+        hist = coarse_counts(counts, m, ln_min, span, n)
         db = span / n
         B_d = jnp.log(self.L_dmax / self.L_dmin).astype(dt)  # B_dmax - B_dmin
         if self.ceiling == "linear":

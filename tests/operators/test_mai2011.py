@@ -112,6 +112,17 @@ def test_histogram_and_curve_match_numpy_models():
         np.testing.assert_allclose(curve, paper_curve(exact), atol=2e-3, err_msg=name)
 
 
+def test_histogram_of_pixels_below_the_floor_and_above_the_range():
+    """Pixels in [1e-6, 1e-5), black, negative and subnormal ones count once, in the
+    floor's bin; those at or above 1e9 are left out (pfstmo's binning; before, the first
+    were counted twice: in their own bin and in the floor's)."""
+    values = [3e-6, 2e-6, 9.9e-6, 0.0, -1.0, 1e-40, 2e-5, 1.0, 250.0, 1e9, 3e12, 5e8]
+    img = np.repeat(np.asarray(values, np.float32)[None, :, None], 3, axis=2)
+    h = np.asarray(histogram(hdrjax.make_operator("mai2011").statistics(img)))
+    np.testing.assert_array_equal(h, pfstmo_histogram(img))
+    assert h.sum() == len(values) - 2
+
+
 def test_merged_statistics_give_the_whole_image_curve():
     op = hdrjax.make_operator("mai2011")
     img = fixtures()["input"][3]
