@@ -91,17 +91,14 @@ OPERATORS: tuple[Entry, ...] = (
     Entry("reinhard2005", {"compat": "pfstmo"}, pfstmo="pfstmo_reinhard05"),
     Entry("mai2011", {"compat": "pfstmo"}, pfstmo="pfstmo_mai11"),
     Entry("pattanaik2000", {}, pfstmo="pfstmo_pattanaik00"),
+    Entry("durand2002", {}, pfstmo="pfstmo_durand02", global_op=False),
 )
 
 
 def entries(registered: list[str]) -> list[Entry]:
     """:data:`OPERATORS`, then an entry for every other registered operator."""
     named = {e.name for e in OPERATORS}
-    rest = [
-        Entry(n, TABLE if n == "tabulated" else {})
-        for n in registered
-        if n not in named
-    ]
+    rest = [Entry(n, TABLE if n == "tabulated" else {}) for n in registered if n not in named]
     return [*OPERATORS, *rest]
 
 

@@ -17,7 +17,7 @@ import jax
 import numpy as np
 
 from .. import io as hio
-from ._pipeline import Pipeline, frame_is_clean, render_batch
+from ._pipeline import Pipeline, frame_is_clean, render_batch, render_sequence_batch
 from ._sequence import (
     estimated_values,
     host_statistics,
@@ -161,6 +161,25 @@ def dispatch_render(
         vals = list(values) + [values[-1]] * (batch_size - n)
         ops = stack_operators(p.operator, vals)
     return render_batch(p, ops, _padded(frames, batch_size), clean)
+
+
+def dispatch_sequence(
+    pipeline: Pipeline,
+    frames: Sequence[np.ndarray],
+    source: tuple | None,
+    fps: float,
+    state: Any,
+    batch_size: int,
+) -> tuple[Any, Any]:
+    """Start the compiled pipeline with the operator's time course on up to ``batch_size``
+    consecutive equal-shape frames in ``source`` primaries, from ``state`` (``None``:
+    adapted to the first frame). Returns the device outputs (the first ``len(frames)``
+    are the frames') and the state to carry to the next frames."""
+    n = len(frames)
+    if not 1 <= n <= batch_size:
+        raise ValueError(f"frames: expected 1..{batch_size} frames, got {n}")
+    p = pipeline.for_source(source)
+    return render_sequence_batch(p, _padded(frames, batch_size), np.int32(n), float(fps), state)
 
 
 def measure_frames(

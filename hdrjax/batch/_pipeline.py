@@ -30,6 +30,7 @@ from .. import _check
 from ..io._display import DEFAULT_COMPRESSION
 from ..operators._base import AbstractOperator, as_float_image, make_operator
 from ..operators._call import clean_operator_call
+from ..operators._time import has_time_course
 
 DISPLAY_FORMATS = ("png", "tif", "jpg")
 """Encoded outputs (8 or 16 bit code values; JPEG 8 bit only)."""
@@ -336,6 +337,34 @@ def render_batch(
     return map_frames(pipeline, one, (ops, x), clean)
 
 
+@eqx.filter_jit
+def render_sequence_batch(
+    pipeline: Pipeline,
+    frames: Float[Array, "B H W 3"],
+    count: Array,
+    fps: float,
+    state: Any,
+) -> tuple[Array, Any]:
+    """Consecutive frames of a video through the pipeline with the operator's time course
+    (:meth:`~hdrjax.operators.AbstractTimeDependentOperator.sequence`), compiled once per
+    shape.
+
+    ``state``: the observer's state after the previous frame (``None``: adapted to the
+    first frame of this batch). ``count``: how many of the frames are real (the others
+    pad the batch to its compiled size). Returns the outputs and the state after the last
+    real frame, to carry to the next batch: a video mapped batch after batch equals one
+    scan over all its frames.
+    """
+    _check.shape(frames, "frames", ndim=4)
+    op = pipeline.operator
+    if not has_time_course(op):
+        raise ValueError(f"fps: {op.name} has no time course")
+    x = pipeline.prepare_batch(frames)
+    mapped, states = op.sequence(x, fps, initial=state)
+    after = jax.tree.map(lambda v: jax.lax.dynamic_index_in_dim(v, count - 1, 0, False), states)
+    return jax.vmap(pipeline.finish)(mapped), after
+
+
 __all__ = [
     "DISPLAY_FORMATS",
     "HDR_FORMATS",
@@ -343,5 +372,6 @@ __all__ = [
     "Step",
     "frame_is_clean",
     "render_batch",
+    "render_sequence_batch",
     "step",
 ]

@@ -15,6 +15,16 @@ frames first (outputs that already exist included, so that a resumed run uses th
 parameters), then a rendering pass. In-process, the frames read by the first pass are kept
 in memory for the second when they fit in ``cache_bytes``; otherwise (and on Dask) frames
 are read twice.
+
+Time-dependent adaptation (``fps``): an operator that declares a time course
+(:class:`~hdrjax.operators.AbstractTimeDependentOperator`: its ``sequence`` method) maps the
+frames as a video shown at ``fps`` frames per second. The frames go through in their order,
+in batches of ``batch_size``, each batch starting from the observer's state the previous
+one ended with, so the result equals one scan over the whole sequence. Every frame is
+computed (the state needs them all); with ``resume``, outputs that exist are not rewritten.
+A frame that cannot be read is left out of the time course (the next frame follows the
+previous one after ``1 / fps``). It runs in this process (not on Dask) and measures nothing
+across frames (``parameters="per-frame"``): the operator adapts to each frame itself.
 """
 
 import dataclasses
@@ -35,9 +45,11 @@ import numpy as np
 
 from .._stats import Statistics
 from ..io._atomic import remove_stale_temporaries
+from ..operators._time import has_time_course, time_dependent_names
 from ._frames import (
     FrameError,
     dispatch_render,
+    dispatch_sequence,
     group_key,
     measure_frames,
     measure_task,
@@ -245,6 +257,18 @@ def _measure_local(
     return records, merged[0], cache
 
 
+def _write(pipeline: Pipeline, col: _Collector, e: _Entry, hb: _HostBatch, i: int) -> None:
+    """Write output ``i`` of a computed batch for ``e`` and record the outcome."""
+    try:
+        write_frame(pipeline, hb.get()[i], e.out)
+    except FrameError as err:
+        col.fail(e, str(err))
+    except Exception as err:  # the computation itself failed: every frame of it fails
+        col.fail(e, f"{e.path}: processing failed: {err}")
+    else:
+        col.ok(e)
+
+
 def _render_local(
     pipeline: Pipeline,
     entries: Sequence[_Entry],
@@ -258,16 +282,7 @@ def _render_local(
 ) -> None:
     buffers: dict[tuple, list] = {}
     in_flight: deque[list[Future]] = deque()
-
-    def write(e: _Entry, hb: _HostBatch, i: int) -> None:
-        try:
-            write_frame(pipeline, hb.get()[i], e.out)
-        except FrameError as err:
-            col.fail(e, str(err))
-        except Exception as err:  # the computation itself failed: every frame of it fails
-            col.fail(e, f"{e.path}: processing failed: {err}")
-        else:
-            col.ok(e)
+    write = functools.partial(_write, pipeline, col)
 
     with ThreadPoolExecutor(max(1, writers), thread_name_prefix="hdrjax-write") as wx:
 
@@ -306,6 +321,79 @@ def _render_local(
         for batch in in_flight:
             for f in batch:
                 f.result()
+
+
+def _render_in_order(
+    pipeline: Pipeline,
+    entries: Sequence[_Entry],
+    skip: set[int],
+    fps: float,
+    batch_size: int,
+    allow_nan: bool,
+    readers: int,
+    writers: int,
+    col: _Collector,
+) -> None:
+    """The frames in order with the operator's time course (module docstring): the state
+    after each batch is the next batch's initial state."""
+    state: list[Any] = [None]
+    chunk: list[tuple[_Entry, np.ndarray]] = []
+    first: list[tuple] = []  # the first frame's shape and primaries
+    write = functools.partial(_write, pipeline, col)
+
+    with ThreadPoolExecutor(max(1, writers), thread_name_prefix="hdrjax-write") as wx:
+        pending: deque[Future] = deque()
+
+        def flush() -> None:
+            members = chunk[:]
+            chunk.clear()
+            try:
+                out, state[0] = dispatch_sequence(
+                    pipeline, [m[1] for m in members], first[0][1], fps, state[0], batch_size
+                )
+            except Exception as err:
+                for e, _ in members:
+                    col.fail(e, f"{e.path}: processing failed: {err}", count=e.index not in skip)
+                return
+            hb = _HostBatch(out)
+            for i, (e, _) in enumerate(members):
+                if e.index not in skip:
+                    pending.append(wx.submit(write, e, hb, i))
+            while len(pending) > 3 * batch_size:  # bounded memory
+                pending.popleft().result()
+
+        for e, res in _reader(entries, allow_nan, readers, 2 * batch_size):
+            if isinstance(res, FrameError):
+                col.fail(e, str(res), count=e.index not in skip)
+                continue
+            rgb, source = res
+            if not first:
+                first.append((rgb.shape, source))
+            elif (rgb.shape, source) != first[0]:
+                col.fail(
+                    e,
+                    f"{e.path}: fps carries the adaptation from frame to frame: every frame"
+                    f" needs the first frame's size {first[0][0][1]}x{first[0][0][0]} and"
+                    " primaries",
+                    count=e.index not in skip,
+                )
+                continue
+            chunk.append((e, rgb))
+            if len(chunk) == batch_size:
+                flush()
+        if chunk:
+            flush()
+        for f in pending:
+            f.result()
+
+
+def check_time_course(pipeline: Pipeline) -> None:
+    """A one-line ``ValueError`` unless the pipeline's operator declares a time course."""
+    if not has_time_course(pipeline.operator):
+        raise ValueError(
+            f"fps: {pipeline.operator.name} has no time course; operators with one:"
+            f" {', '.join(time_dependent_names())}"
+        )
 
 
 # ---------------------------------------------------------------------------- Dask
@@ -409,6 +497,7 @@ def run(
     *,
     parameters: Parameters = "per-frame",
     smooth_frames: float = 5.0,
+    fps: float | None = None,
     batch_size: int = 8,
     workers: int | None = None,
     scheduler: Any = None,
@@ -433,6 +522,9 @@ def run(
             together, one set of parameters), ``"smooth"`` (per frame, then a centred
             exponential moving average over time; see :mod:`hdrjax.batch._sequence`).
         smooth_frames: the time constant ``τ`` of ``"smooth"``, in frames.
+        fps: map the frames as a video shown at this many frames per second, with the
+            operator's time course of adaptation (module docstring; an operator without
+            one raises ``ValueError``). ``None``: each frame as a still image.
         batch_size: frames per compiled call (and per Dask task).
         workers: run on a new local Dask cluster with this many worker processes (they are
             spawned: a script that passes ``workers`` needs the usual
@@ -472,6 +564,17 @@ def run(
         raise ValueError(f"workers: expected an integer >= 1, got {workers!r}")
     if not isinstance(pipeline, Pipeline):
         pipeline = Pipeline(pipeline)
+    if fps is not None:
+        if isinstance(fps, bool) or not float(fps) > 0 or not np.isfinite(float(fps)):
+            raise ValueError(f"fps: expected frames per second > 0, got {fps!r}")
+        check_time_course(pipeline)
+        if workers is not None or scheduler is not None:
+            raise ValueError("fps: the frames go through in order in this process, not on Dask")
+        if parameters != "per-frame":
+            raise ValueError(
+                f"fps: the time course adapts to each frame itself; parameters={parameters!r}"
+                " does not apply"
+            )
     if parameters == "same":
         statistics_settings(pipeline.operator, pooled=True)  # statistics that merge
     batch_size = int(batch_size)
@@ -496,6 +599,21 @@ def run(
     bar = _progress(len(todo), progress, "frames")
     col = _Collector(bar, report)
     try:
+        if fps is not None:
+            if not todo:  # every output exists: nothing to compute
+                return _summary(skipped, col, t0)
+            _render_in_order(
+                pipeline,
+                entries,
+                skip_ids,
+                float(fps),
+                batch_size,
+                allow_nan,
+                readers,
+                writers,
+                col,
+            )
+            return _summary(skipped, col, t0)
         if dask:
             client, cluster, own_client = _client(workers, scheduler)
         values = None
@@ -538,6 +656,10 @@ def run(
         # temporaries a killed writer (this run's or an earlier one's) left next to the
         # outputs; those of another run writing into this folder now are left alone
         remove_stale_temporaries([e.out for e in entries])
+    return _summary(skipped, col, t0)
+
+
+def _summary(skipped: Sequence[_Entry], col: _Collector, t0: float) -> BatchSummary:
     failed = {
         path: msg for _, (path, msg) in sorted(col.failed.items()) if path not in col.done.values()
     }

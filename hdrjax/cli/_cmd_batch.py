@@ -85,6 +85,14 @@ def register(subparsers) -> None:
         default=5.0,
         help="time constant of --smooth in frames (default 5)",
     )
+    p.add_argument(
+        "--fps",
+        type=positive_float,
+        metavar="FPS",
+        help="map the frames as a video at FPS frames per second with the operator's time "
+        "course of adaptation, carried from frame to frame in order (an operator without "
+        "one gives an error listing those that have one)",
+    )
     add_set_argument(p)
     add_parameter_shortcuts(p, SHORTCUT_OPTIONS[:5])
     p.add_argument(
@@ -222,6 +230,7 @@ def run(args: argparse.Namespace) -> int:
             args.output,
             parameters=args.parameters,
             smooth_frames=args.smooth_frames,
+            fps=args.fps,
             batch_size=args.batch_size,
             workers=args.workers,
             scheduler=args.scheduler,
@@ -229,7 +238,10 @@ def run(args: argparse.Namespace) -> int:
             resume=not args.no_resume,
             allow_nan=args.allow_nan,
         )
-    except (ValueError, ImportError) as e:
+    except ValueError as e:
+        msg = str(e)  # the fps argument's messages name the option
+        raise UsageError(f"--{msg}" if msg.startswith("fps:") else msg) from None
+    except ImportError as e:
         raise UsageError(str(e)) from None
     except OSError as e:
         raise DataError(str(e)) from None

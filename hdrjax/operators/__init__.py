@@ -43,6 +43,7 @@ from ._classic import (
     Simple as Simple,
 )
 from ._drago2003 import Drago2003 as Drago2003
+from ._durand2002 import Durand2002 as Durand2002
 from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
 from ._kimkautz2008 import KimKautz2008 as KimKautz2008
 from ._linear import (
@@ -64,9 +65,17 @@ from ._reinhard2002_local import (
 )
 from ._reinhard2005 import Reinhard2005 as Reinhard2005
 from ._tabulated import Tabulated as Tabulated
+from ._time import (
+    AbstractTimeDependentOperator as AbstractTimeDependentOperator,
+    time_dependent_names as time_dependent_names,
+)
 from ._tumblin import Tumblin1999 as Tumblin1999, TumblinReinhard as TumblinReinhard
 from ._tumblin_rushmeier1993 import TumblinRushmeier1993 as TumblinRushmeier1993
-from ._vanhateren2006 import VanHateren2006 as VanHateren2006
+from ._vanhateren2006 import (
+    ConeState as ConeState,
+    VanHateren2006 as VanHateren2006,
+    vanhateren2006_sequence as vanhateren2006_sequence,
+)
 from ._view_transforms import (
     AcesHill as AcesHill,
     AcesNarkowicz2015 as AcesNarkowicz2015,

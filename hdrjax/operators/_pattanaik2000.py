@@ -45,10 +45,8 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._stats import Statistics
 from ._base import (
-    AbstractOperator,
     Prepared,
     StatisticsSettings,
-    as_float_image,
     bound_stats,
     dispatch,
     estimated,
@@ -59,6 +57,7 @@ from ._base import (
     safe_log,
     weights_field,
 )
+from ._time import AbstractTimeDependentOperator, scan_frames, sequence_arguments
 
 REFERENCE = (
     "Pattanaik, Tumblin, Yee, Greenberg 2000, Time-dependent visual adaptation for fast"
@@ -225,7 +224,7 @@ def _map(rgb: Array, L: Array, state: AdaptationState, display_adaptation: Array
 
 
 @register("pattanaik2000")
-class Pattanaik2000(AbstractOperator):
+class Pattanaik2000(AbstractTimeDependentOperator):
     """Pattanaik et al. 2000 cone and rod response model (module docstring), static mode,
     with pfstmo's defaults (``pfstmo_pattanaik00`` without ``--time-dependence``): the
     observer fully adapted to ``A = 5 (exp(mean ln(L + 10⁻⁴)) − 10⁻⁴)`` for cones and rods,
@@ -300,6 +299,16 @@ class Pattanaik2000(AbstractOperator):
 
     def _apply(self, p: Prepared) -> Array:
         return _map(p.rgb, p.L, self.state(), self.display_adaptation)
+
+    def sequence(
+        self,
+        frames: Float[ArrayLike, "T H W 3"],
+        fps: float,
+        *,
+        initial: AdaptationState | None = None,
+    ) -> tuple[Float[Array, "T H W 3"], AdaptationState]:
+        """The paper's time course: :func:`pattanaik2000_sequence` with this operator."""
+        return pattanaik2000_sequence(frames, fps, self, initial=initial)
 
 
 def adaptation_goal(log_average: Array, delta: float, key: float = KEY) -> Array:
@@ -376,12 +385,9 @@ def pattanaik2000_sequence(
     """
     if compat not in ("paper", "pfstmo"):
         raise ValueError(f"compat: expected 'paper' or 'pfstmo', got {compat!r}")
-    frames = as_float_image(frames, "frames")
-    if frames.ndim != 4:
-        raise ValueError(f"frames: expected (T, H, W, 3), got shape {frames.shape}")
+    frames, dt = sequence_arguments(frames, fps)
     op = Pattanaik2000() if op is None else op
     op = eqx.tree_at(lambda o: (o.A_cone, o.A_rod), op, (None, None), is_leaf=lambda x: x is None)
-    dt = 1.0 / jnp.asarray(fps, frames.dtype)
     if initial is not None:
         initial = AdaptationState(*(jnp.asarray(v, frames.dtype) for v in initial))
     return _sequence(frames, dt, op, initial, compat)
@@ -404,21 +410,19 @@ def _sequence(
     assert settings is not None
     la = jax.vmap(log_average)(frames)
     goals = adaptation_goal(la, op.delta, KEY if compat == "paper" else 1.0)
-    # the first frame is mapped with the initial state unless one was given
-    moves = jnp.arange(frames.shape[0]) >= (1 if initial is None else 0)
+    adapted_to_first = initial is None
     if initial is None:
         first = adaptation_goal(la[0], op.delta)
         initial = steady_state(first, first)
     step = "exact" if compat == "paper" else "pfstmo"
 
-    def body(state, x):
-        frame, goal, move = x
-        moved = adapt(state, goal, goal, dt, compat=step)
-        state = jax.tree.map(lambda a, b: jnp.where(move, a, b), moved, state)
-        return state, (_apply_state(op, frame, state), state)
+    def move(state, x):
+        return adapt(state, x[1], x[1], dt, compat=step)
 
-    _, (out, states) = jax.lax.scan(body, initial, (frames, goals, moves))
-    return out, states
+    def render(state, x):
+        return _apply_state(op, x[0], state)
+
+    return scan_frames(move, render, initial, (frames, goals), adapted_to_first)
 
 
 def _apply_state(op: Pattanaik2000, frame: Array, state: AdaptationState) -> Array:

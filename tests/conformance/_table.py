@@ -53,6 +53,7 @@ import hdrjax.batch as hb
 import hdrjax.display as hd
 import hdrjax.filters as hf
 import hdrjax.lights as hl
+import hdrjax.metrics as hm
 import hdrjax.panorama as hp
 import hdrjax.targets as ht
 import hdrjax.tile as htile
@@ -547,6 +548,53 @@ for _c in list(CASES):
     if not CASES[_c].jit and "simulate" not in _c:
         CASES[_c] = dataclasses.replace(CASES[_c], dtypes=("float16", "float32"))
 
+# --- metrics: an image against a fixed reference (a statistic: bad pixels are left out) ------
+_GREY = 47.0
+"""cd/m² of the metrics' constant reference (0.47 relative): no family equals it."""
+
+
+def no_finite(img):
+    """No pixel is finite in all three channels (documented: NaN, no pixel to compare)."""
+    return not np.all(np.isfinite(np.asarray(img, np.float64)), axis=-1).any()
+
+
+CASES["metrics.pu21_encode"] = Case(
+    lambda x: hm.pu21_encode(_abs(_cd(x))), ("hdrjax.metrics.pu21_encode",), accepts=ELEMENTWISE
+)
+for _f in (hm.pu_psnr, hm.pu_ssim, hm.log_psnr):
+    CASES[f"metrics.{_f.__name__}"] = Case(
+        lambda x, f=_f: f(_cd(x), jnp.full(jnp.shape(x), _GREY, _fdt(x))),
+        (f"hdrjax.metrics.{_f.__name__}",),
+        reach="stat",
+        batch=True,
+        nonfinite_ok=no_finite,
+        out_range=(-1.0, 1.0) if _f is hm.pu_ssim else None,
+    )
+CASES["metrics.mpsnr"] = Case(
+    lambda x: hm.mpsnr(_cd(x), jnp.full(jnp.shape(x), _GREY, _fdt(x))),
+    ("hdrjax.metrics.mpsnr",),
+    reach="stat",
+    batch=True,
+    nonfinite_ok=no_finite,
+    grad=False,  # 8-bit renditions: piecewise constant, gradient 0 (documented)
+)
+CASES["metrics.delta_e_itp"] = Case(
+    # against saturated red: far from every family, so that float32 rounding of ICtCp
+    # (about 2e-3 ΔE_ITP, documented) stays within the jit == eager tolerance
+    lambda x: hm.delta_e_itp(_cd(x), jnp.zeros(jnp.shape(x), _fdt(x)).at[..., 0].set(_GREY)),
+    ("hdrjax.metrics.delta_e_itp",),
+    batch=True,
+    accepts=EMPTY_PER_PIXEL,
+)
+CASES["metrics.tmqi"] = Case(
+    # the LDR image: x / (1 + |x|), display-like values; NaN/Inf pixels are set to 0
+    lambda x: hm.tmqi(x, x / (1 + jnp.abs(x))),
+    ("hdrjax.metrics.tmqi", "hdrjax.metrics.TMQIScore"),
+    reach="stat",
+    batch=True,
+    out_range=(0.0, 1.0),
+)
+
 # the operators' automatic estimates as functions: every public function of hdrjax.estimate
 for _name in hdrjax.estimate.__all__:
     _f = getattr(hdrjax.estimate, _name)
@@ -771,6 +819,24 @@ CASES["operators.pattanaik2000_sequence"] = Case(
 )
 
 
+def _vanhateren_sequence(x):
+    x = _cd(x)
+    frames = jnp.stack([x, x * 0.5, x * 0.25])
+    out = hdrjax.operators.vanhateren2006_sequence(frames, fps=16.0, max_step=4.0)[0]
+    return jnp.moveaxis(out, 0, -2)  # (H, W, frame, channel): per-pixel, as the checks read
+
+
+CASES["operators.vanhateren2006_sequence"] = Case(
+    _vanhateren_sequence,
+    (
+        "hdrjax.operators.vanhateren2006_sequence",
+        "hdrjax.operators.ConeState",
+        "hdrjax.operators.AbstractTimeDependentOperator",
+        "hdrjax.operators.time_dependent_names",
+    ),
+)
+
+
 def _report_numbers(report):
     """The numbers of a SceneReport (global statistics: finite with bad pixels excluded)."""
     vals = [
@@ -910,6 +976,13 @@ _PARAMS: dict[str, tuple[tuple[str, Callable], ...]] = {
     "targets.MeanLuminance": (("value", lambda x: ht.MeanLuminance(-0.2).residuals(x)),),
     "targets.Reference": (("space", lambda x: ht.Reference(x, space="rgb").residuals(x)),),
 }
+_PARAMS["metrics.pu21_encode"] = (("params", lambda x: hm.pu21_encode(x, params="pu08")),)
+_PARAMS["metrics.pu_psnr"] = (("params", lambda x: hm.pu_psnr(x, x, params="pu08")),)
+_PARAMS["metrics.pu_ssim"] = (("params", lambda x: hm.pu_ssim(x, x, params="PU21")),)
+_PARAMS["metrics.log_psnr"] = (("floor", lambda x: hm.log_psnr(x, x, floor=-1e-5)),)
+_PARAMS["metrics.mpsnr"] = (("span", lambda x: hm.mpsnr(x, x, span=0)),)
+_PARAMS["metrics.tmqi"] = (("ldr", lambda x: hm.tmqi(x, x[..., :-1, :])),)
+_PARAMS["metrics.delta_e_itp"] = (("b", lambda x: hm.delta_e_itp(x, x[:1])),)
 for _n in CASES:
     if _n.startswith("filters."):
         f = hf.mean_filter if "mean" in _n else hf.median_filter

@@ -52,6 +52,8 @@ NOT_DIFFERENTIABLE = {
     "n_bins": "ward1997: histogram size (integer)",
     "ceiling": "ward1997: choice of the linear or human-contrast ceiling (string)",
     "compat": "choice of the peer whose departures from the paper are reproduced (string)",
+    "sigma_s": "durand2002: spatial scale; sets the integer kernel radius and the halo",
+    "max_segments": "durand2002: static bound on the bilateral filter's segments (integer)",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
@@ -83,6 +85,19 @@ CASES = [
         "drago2003",
         dict(bias=0.8, L_dmax=90.0, log_average=0.05, L_max=12.0),
         ("bias", "L_dmax", "log_average", "L_max"),
+    ),
+    (
+        "durand2002",
+        dict(
+            sigma_r=0.5,
+            base_contrast=4.0,
+            saturation=0.8,
+            L_min=1e-3,
+            L_max=20.0,
+            L_low=0.01,
+            L_high=5.0,
+        ),
+        ("sigma_r", "base_contrast", "saturation", "L_min", "L_max", "L_low", "L_high"),
     ),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0), ("L_wa", "L_dmax")),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0, compat="hdrtoolbox"), ("L_wa", "L_dmax")),

@@ -4,6 +4,7 @@ results equal the whole-image operator whatever the chunk size, and a new image 
 compiles nothing (in the library, the command line and batches)."""
 
 import contextlib
+import math
 
 import jax
 import jax.monitoring
@@ -21,8 +22,11 @@ from ..conftest import DATA
 from ..operators.cases import make, natural
 
 NAMES = hdrjax.operator_names()
-LOCAL = {"reinhard2002_local", "reinhard2002_auto"}  # neighbourhood operators (halo > 0)
-WHOLE = {"reinhard2005"}  # pfstmo's stretch of the output by its own minimum and maximum
+_HALOS = {n: max(make(n).halo((64, 64, 3))) for n in NAMES}
+LOCAL = {n for n, h in _HALOS.items() if 0 < h < math.inf}  # neighbourhoods (a finite halo)
+# operators that need the whole image until measured (an infinite halo): pfstmo's stretch
+# of the output by its own minimum and maximum (reinhard2005)
+WHOLE = {n for n, h in _HALOS.items() if h == math.inf}
 CHUNKED = [n for n in NAMES if n not in LOCAL | WHOLE]
 
 _compiles: list[str] = []
