@@ -51,7 +51,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from . import _check
-from ._scale import saturate_finite
+from ._scale import inverse_pow2, saturate_finite
 
 K_M = 683.0
 """Maximum luminous efficacy of photopic vision, lm/W (CIE 015:2018; the SI candela's
@@ -282,11 +282,27 @@ def spectral_weights(
     )
 
 
-@jax.jit
-def _apply(x: Array, w: Array) -> Array:
+def _matmul(x: Array, w: Array) -> Array:
     # HIGHEST: on GPUs the default float32 matmul rounds its inputs to TF32 (10-bit
     # mantissa), an error of ~1e-3 that would show in luminance
     return jnp.matmul(x, w, precision=jax.lax.Precision.HIGHEST)
+
+
+@jax.jit
+def _apply(x: Array, w: Array) -> Array:
+    """``x @ w``; pixels near the float maximum whose products overflow to ±Inf of both
+    signs (the weights have small negative lobes) would sum to NaN: where a finite pixel
+    gives NaN, the image is integrated again with each pixel scaled into ``[0.5, 1)`` and
+    scaled back (±Inf, which the caller saturates). The rescue runs only when needed
+    (``lax.cond``)."""
+    y = _matmul(x, w)
+    finite = jnp.all(jnp.isfinite(x), axis=-1, keepdims=True)
+
+    def rescued(y):
+        f = inverse_pow2(jnp.max(jnp.where(finite, jnp.abs(x), 0.0), axis=-1, keepdims=True))
+        return jnp.where(finite & jnp.isnan(y), _matmul(x * f, w) / f, y)
+
+    return jax.lax.cond(jnp.any(finite & jnp.isnan(y)), rescued, lambda y: y, y)
 
 
 def spectral_to_xyz(
