@@ -416,12 +416,18 @@ def render(results: dict[str, dict], plots: dict[str, Any] | None = None) -> str
 
 OPERATORS_BENCH = "operators"
 """The benchmark whose records make the operator table (bench_operators.py)."""
+LATER = "operators"
+"""Subfolder of the results folder for benchmarks run later than the whole suite, on
+another day or machine (``run.py --only operators metrics --out <results>/operators``):
+the README shows them under their own date and machine."""
 
 
-def operator_table(records: list[dict]) -> str | None:
+def operator_table(records: list[dict], others: dict[str, dict] | None = None) -> str | None:
     """Every operator of the ``operators`` benchmark: hdrjax's warm time and compile time,
     pfstmo's and OpenCV's times for the same paper where they have one, the ratio to
-    pfstmo and whether the issue's goal is met; ``None`` without such records."""
+    pfstmo and whether the issue's goal is met, and hdrjax's time on each backend of
+    ``others`` (``{backend: {"meta", "records"}}``, e.g. a GPU); ``None`` without records."""
+    others = others or {}
     cases = group([r for r in records if r.get("benchmark") == OPERATORS_BENCH], "case")
     rows = []
     for (case,), recs in cases.items():
@@ -447,6 +453,18 @@ def operator_table(records: list[dict]) -> str | None:
                 peer("OpenCV"),
                 "" if ratio is None else f"**{fmt_ratio(ratio)}**{goal}",
             ]
+            + [
+                next(
+                    (
+                        fmt_ms(r["median_s"])
+                        for r in timings(o["records"])
+                        if (r["benchmark"], r["case"], r["impl"])
+                        == (OPERATORS_BENCH, case, "hdrjax")
+                    ),
+                    "",
+                )
+                for o in others.values()
+            ]
         )
     if not rows:
         return None
@@ -456,10 +474,19 @@ def operator_table(records: list[dict]) -> str | None:
         " pfstmo's program of the same paper (its pipeline minus the same pipeline without"
         " it) and OpenCV's where they have one:\n\n"
         + _table(
-            ["operator", "hdrjax ms", "compile s", "pfstmo ms", "OpenCV ms", "hdrjax/pfstmo"],
+            ["operator", "hdrjax ms", "compile s", "pfstmo ms", "OpenCV ms", "hdrjax/pfstmo"]
+            + [f"{backend_title(b, o['meta'])} hdrjax ms" for b, o in others.items()],
             rows,
-            ["---", "---:", "---:", "---:", "---:", "---"],
+            ["---", "---:", "---:", "---:", "---:", "---"] + ["---:"] * len(others),
         )
+    )
+
+
+def _median(records: list[dict], bench: str, case: str, impl: str) -> float:
+    return next(
+        r["median_s"]
+        for r in timings(records)
+        if (r["benchmark"], r["case"], r["impl"]) == (bench, case, impl)
     )
 
 
@@ -538,7 +565,37 @@ def readme_section(results: dict[str, dict], readme_dir: Path, results_dir: Path
         rows.append(row)
     if rows:
         lines += [_table(header, rows, align), ""]
-    ops = operator_table(results[main]["records"])
+    later_file = results_dir / LATER / f"results-{main}.json"
+    later_all = load_results(later_file.parent) if later_file.exists() else {}
+    later = later_all.get(main)
+    others = {b: d for b, d in later_all.items() if b != main}
+    if later is not None:
+        lines += [
+            f"Measured {_date(later['meta'])} on {machine_line(later['meta'])}"
+            f" (`benchmarks/run.py --only {' '.join(later['meta'].get('modules', {}))}"
+            f" --out benchmarks/results/{LATER}`)"
+            + "".join(
+                f"; {backend_title(b, d['meta'])}: {_date(d['meta'])} on {machine_line(d['meta'])}"
+                for b, d in others.items()
+            )
+            + ":",
+            "",
+        ]
+        rows = [
+            [
+                r["benchmark"],
+                r["case"],
+                r["peer"],
+                fmt_ms(_median(later["records"], r["benchmark"], r["case"], r["hdrjax"])),
+                fmt_ms(_median(later["records"], r["benchmark"], r["case"], r["peer"])),
+                f"**{fmt_ratio(r['ratio'])}**",
+            ]
+            for r in ratios(later["records"])
+            if r["primary"] and r["benchmark"] != OPERATORS_BENCH
+        ]
+        if rows:
+            lines += [_table(header[:6], rows, align[:6]), ""]
+    ops = operator_table((later or results[main])["records"], others)
     if ops:
         lines += [ops, ""]
     defaults = [
