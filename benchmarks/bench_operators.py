@@ -90,8 +90,12 @@ OPERATORS: tuple[Entry, ...] = (
     ),
     Entry("reinhard2005", {"compat": "pfstmo"}, pfstmo="pfstmo_reinhard05"),
     Entry("mai2011", {"compat": "pfstmo"}, pfstmo="pfstmo_mai11"),
+    Entry("mantiuk2008", {}, pfstmo="pfstmo_mantiuk08"),
     Entry("pattanaik2000", {}, pfstmo="pfstmo_pattanaik00"),
     Entry("durand2002", {}, pfstmo="pfstmo_durand02", global_op=False),
+    Entry("fattal2002", {}, pfstmo="pfstmo_fattal02", global_op=False),
+    Entry("ashikhmin2002", {}, global_op=False),
+    Entry("chiu1993", {}, global_op=False),
 )
 
 

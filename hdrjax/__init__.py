@@ -28,6 +28,7 @@ _SUBMODULES = {
     "operators": ".operators",
     "panorama": ".panorama",
     "plot": ".plot",
+    "report": ".report",
     "spaces": ".spaces",
     "spectral": ".spectral",
     "stats": "._stats",
@@ -42,6 +43,7 @@ _ATTRIBUTES = {
     "REC709_WEIGHTS": "._colour",
     "luminance": "._colour",
     "luminance_weights": "._colour",
+    "compare": ".report",
     "desaturate_highlights": ".display",
     "false_color": ".display",
     "mean_filter": ".filters",
@@ -86,6 +88,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         operators as operators,
         panorama as panorama,
         plot as plot,
+        report as report,
         spaces as spaces,
         spectral as spectral,
         study as study,
@@ -113,3 +116,4 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         operator_names as operator_names,
         tonemap as tonemap,
     )
+    from .report import compare as compare

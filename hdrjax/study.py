@@ -18,7 +18,8 @@ pixels on its long side (:func:`hdrjax.fit.downscale`, the same reduction
   channel at display white, ``mean(σ((max_c rgb_c − 1) / 0.01))``.
 
 With a ``target`` the sweep also returns its loss ``Σ r²`` (``r = target.residuals``), the
-quantity :func:`hdrjax.fit.fit` minimises.
+quantity :func:`hdrjax.fit.fit` minimises; a target that takes the source image
+(:class:`hdrjax.targets.TMQI`) gets the box-filtered input the operator was applied to.
 
 The whole grid (the outer product of the value lists) is evaluated in one jit-compiled
 ``jax.vmap`` over the flattened grid; image statistics that do not depend on the swept
@@ -149,7 +150,7 @@ def _sweep_jit(op, image, names, flat, target, max_size, batch_size):
         s = stats.statistics(out)
         if target is None:
             return s, None
-        r = target.residuals(out)
+        r = target.residuals_for(out, small)
         return s, jnp.sum(r * r)
 
     if batch_size is None:

@@ -5,6 +5,7 @@ operator says so); output is display-referred linear RGB, nominally [0, 1], befo
 encoding (:mod:`hdrjax.display`). Every operator works under ``jit``, ``vmap`` and ``grad``.
 """
 
+from ._ashikhmin2002 import Ashikhmin2002 as Ashikhmin2002
 from ._base import (
     ENTRY_POINT_GROUP as ENTRY_POINT_GROUP,
     AbstractLuminanceCurve as AbstractLuminanceCurve,
@@ -30,6 +31,7 @@ from ._budak2005 import (
     Budak2005 as Budak2005,
     ConeOpponentSpace as ConeOpponentSpace,
 )
+from ._chiu1993 import Chiu1993 as Chiu1993
 from ._classic import (
     Exponential as Exponential,
     ExponentiationMapping as ExponentiationMapping,
@@ -44,6 +46,7 @@ from ._classic import (
 )
 from ._drago2003 import Drago2003 as Drago2003
 from ._durand2002 import Durand2002 as Durand2002
+from ._fattal2002 import Fattal2002 as Fattal2002
 from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
 from ._kimkautz2008 import KimKautz2008 as KimKautz2008
 from ._linear import (
@@ -53,6 +56,7 @@ from ._linear import (
     saturation_luminance as saturation_luminance,
 )
 from ._mai2011 import Mai2011 as Mai2011
+from ._mantiuk2008 import Mantiuk2008 as Mantiuk2008
 from ._pattanaik2000 import (
     AdaptationState as AdaptationState,
     Pattanaik2000 as Pattanaik2000,

@@ -18,10 +18,20 @@ Non-finite display pixels (NaN input pixels) are excluded from every statistic.
 
 Targets compose: ``t1 + t2`` concatenates residual vectors (a weighted sum of squared
 residuals), ``2.0 * t`` scales a target's weight.
+
+Targets that compare the display image with the operator's *input* (TMQI's structural
+fidelity, :class:`hdrjax.targets.TMQI`) declare ``takes_source = True``: their
+``statistics`` and ``residuals`` take that input image as the keyword ``source`` (the
+image the operator was applied to, of the display image's height and width: in
+:func:`hdrjax.fit.fit` and :func:`hdrjax.study.sweep` the downscaled input).
+:meth:`AbstractTarget.statistics_for` and :meth:`AbstractTarget.residuals_for` pass it to
+the targets that take it and call the others with the display image alone, so a target
+written for the display image alone needs no change.
 """
 
 import abc
 from collections.abc import Sequence
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -34,7 +44,8 @@ from .._stats import percentile_by_selection, selection_range
 from ..display import srgb_encode
 
 
-def _arr(x: ArrayLike) -> Array:
+def as_float_array(x: ArrayLike) -> Array:
+    """``x`` as a JAX array; integers and bools in the default float."""
     x = jnp.asarray(x)
     if not jnp.issubdtype(x.dtype, jnp.floating):
         x = x.astype(jnp.result_type(float))
@@ -42,10 +53,10 @@ def _arr(x: ArrayLike) -> Array:
 
 
 def _vec(x: ArrayLike) -> Array:
-    return jnp.atleast_1d(_arr(x))
+    return jnp.atleast_1d(as_float_array(x))
 
 
-def _display(rgb: ArrayLike) -> Array:
+def display_array(rgb: ArrayLike) -> Array:
     """The display image as an array; half floats are computed in the default float."""
     _check.shape(rgb, "display")
     rgb = jnp.asarray(rgb)
@@ -56,7 +67,7 @@ def _display(rgb: ArrayLike) -> Array:
 
 def _display_luminance(rgb: Array, weights: tuple[float, float, float]) -> tuple[Array, Array]:
     """Clipped display luminance and the mask of finite pixels."""
-    rgb = _display(rgb)
+    rgb = display_array(rgb)
     finite = jnp.all(jnp.isfinite(rgb), axis=-1)
     safe = jnp.where(finite[..., None], rgb, 0.0)
     return luminance(jnp.clip(safe, 0.0, 1.0), weights), finite
@@ -71,7 +82,38 @@ def _weights(w) -> tuple[float, float, float]:
 
 
 class AbstractTarget(eqx.Module):
-    """A vector of statistics of a display image and the values they should take."""
+    """A vector of statistics of a display image and the values they should take.
+
+    ``takes_source`` (a class variable, ``False`` here): ``True`` for targets whose
+    ``statistics`` and ``residuals`` also take the operator's input image as the keyword
+    ``source`` (see the module docstring); callers go through :meth:`statistics_for` and
+    :meth:`residuals_for`, which pass it only to those.
+
+    ``maximises`` (a class variable, ``False`` here): ``True`` for targets whose residual is
+    ``weight · (1 − metric)`` of a quality metric that is maximised, not met: their loss
+    keeps a positive minimum (see :func:`hdrjax.fit.fit`'s default solver).
+    """
+
+    takes_source: ClassVar[bool] = False
+    maximises: ClassVar[bool] = False
+
+    def statistics_for(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None
+    ) -> Float[Array, " n"]:
+        """:meth:`statistics` of ``display``, made by an operator from ``source`` (passed to
+        targets that take it)."""
+        if self.takes_source:
+            return self.statistics(display, source=source)  # type: ignore[call-arg]
+        return self.statistics(display)
+
+    def residuals_for(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None
+    ) -> Float[Array, " m"]:
+        """:meth:`residuals` of ``display``, made by an operator from ``source`` (passed to
+        targets that take it)."""
+        if self.takes_source:
+            return self.residuals(display, source=source)  # type: ignore[call-arg]
+        return self.residuals(display)
 
     @abc.abstractmethod
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " n"]:
@@ -120,8 +162,8 @@ class MeanLuminance(AbstractStatisticTarget):
     -0.25
     """
 
-    value: Array = eqx.field(converter=_arr)
-    weight: Array = eqx.field(default=1.0, converter=_arr)
+    value: Array = eqx.field(converter=as_float_array)
+    weight: Array = eqx.field(default=1.0, converter=as_float_array)
     weights: tuple[float, float, float] = eqx.field(
         static=True, default=REC709_WEIGHTS, converter=_weights
     )
@@ -155,7 +197,7 @@ class Percentiles(AbstractStatisticTarget):
 
     q: Array = eqx.field(converter=_vec)
     value: Array = eqx.field(converter=_vec)
-    weight: Array = eqx.field(default=1.0, converter=_arr)
+    weight: Array = eqx.field(default=1.0, converter=as_float_array)
     weights: tuple[float, float, float] = eqx.field(
         static=True, default=REC709_WEIGHTS, converter=_weights
     )
@@ -170,7 +212,7 @@ class Percentiles(AbstractStatisticTarget):
     ):
         self.q = _vec(q)
         self.value = _vec(value)
-        self.weight = _arr(weight)
+        self.weight = as_float_array(weight)
         self.weights = _weights(weights)
         self.select = selection_range(self.q)
 
@@ -200,8 +242,8 @@ class ClippedFraction(AbstractStatisticTarget):
         threshold: display value counted as clipped (1.0). softness: step width (0.01).
     """
 
-    value: Array = eqx.field(converter=_arr)
-    weight: Array = eqx.field(default=1.0, converter=_arr)
+    value: Array = eqx.field(converter=as_float_array)
+    weight: Array = eqx.field(default=1.0, converter=as_float_array)
     threshold: float = eqx.field(static=True, default=1.0)
     softness: float = eqx.field(static=True, default=0.01)
 
@@ -210,7 +252,7 @@ class ClippedFraction(AbstractStatisticTarget):
         _check.positive(self.softness, "softness")
 
     def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " 1"]:
-        display = _display(display)
+        display = display_array(display)
         finite = jnp.all(jnp.isfinite(display), axis=-1)
         # channel max as two elementwise maxima: fuses with its consumers; the reduction's
         # JVP (an equality mask over the channel axis) made full-resolution fits ~4x slower
@@ -235,7 +277,7 @@ class Histogram(AbstractStatisticTarget):
     """
 
     value: Array = eqx.field(converter=lambda v: _vec(v) / jnp.sum(_vec(v)))
-    weight: Array = eqx.field(default=1.0, converter=_arr)
+    weight: Array = eqx.field(default=1.0, converter=as_float_array)
     softness: float = eqx.field(static=True, default=0.5)
     weights: tuple[float, float, float] = eqx.field(
         static=True, default=REC709_WEIGHTS, converter=_weights
@@ -290,8 +332,8 @@ class Reference(AbstractTarget):
         eps: offset of the logarithm (1/256).
     """
 
-    reference: Array = eqx.field(converter=_arr)
-    weight: Array = eqx.field(default=1.0, converter=_arr)
+    reference: Array = eqx.field(converter=as_float_array)
+    weight: Array = eqx.field(default=1.0, converter=as_float_array)
     space: str = eqx.field(static=True, default="log")
     eps: float = eqx.field(static=True, default=1.0 / 256.0)
 
@@ -306,7 +348,7 @@ class Reference(AbstractTarget):
             raise ValueError(
                 f"Reference: image {display.shape} and reference {self.reference.shape} differ"
             )
-        display, reference = _display(display), _display(self.reference)
+        display, reference = display_array(display), display_array(self.reference)
         finite = jnp.all(jnp.isfinite(display), axis=-1) & jnp.all(jnp.isfinite(reference), axis=-1)
         a = jnp.clip(jnp.where(finite[..., None], display, 0.0), 0.0, 1.0)
         b = jnp.clip(jnp.where(finite[..., None], reference, 0.0), 0.0, 1.0)
@@ -331,21 +373,31 @@ class Reference(AbstractTarget):
 
 
 class Scaled(AbstractTarget):
-    """A target with its residuals multiplied by ``scale`` (``scale * target``)."""
+    """A target with its residuals multiplied by ``scale`` (``scale * target``); ``source``
+    is passed on to a target that takes it."""
+
+    takes_source: ClassVar[bool] = True
 
     target: AbstractTarget
-    scale: Array = eqx.field(converter=_arr)
+    scale: Array = eqx.field(converter=as_float_array)
 
-    def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " n"]:
-        return self.target.statistics(display)
+    def statistics(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None = None
+    ) -> Float[Array, " n"]:
+        return self.target.statistics_for(display, source)
 
-    def residuals(self, display: Float[Array, "H W 3"]) -> Float[Array, " m"]:
-        return self.scale * self.target.residuals(display)
+    def residuals(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None = None
+    ) -> Float[Array, " m"]:
+        return self.scale * self.target.residuals_for(display, source)
 
 
 class Combined(AbstractTarget):
     """Several targets at once: statistics and residuals are concatenated, so the loss is
-    the sum of the parts' losses (``t1 + t2``; weight each with ``w * t``)."""
+    the sum of the parts' losses (``t1 + t2``; weight each with ``w * t``). ``source`` is
+    passed on to the parts that take it."""
+
+    takes_source: ClassVar[bool] = True
 
     targets: tuple[AbstractTarget, ...]
 
@@ -355,11 +407,15 @@ class Combined(AbstractTarget):
             raise ValueError("Combined: expected one or more targets")
         self.targets = targets
 
-    def statistics(self, display: Float[Array, "H W 3"]) -> Float[Array, " n"]:
-        return jnp.concatenate([t.statistics(display) for t in self.targets])
+    def statistics(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None = None
+    ) -> Float[Array, " n"]:
+        return jnp.concatenate([t.statistics_for(display, source) for t in self.targets])
 
-    def residuals(self, display: Float[Array, "H W 3"]) -> Float[Array, " m"]:
-        return jnp.concatenate([t.residuals(display) for t in self.targets])
+    def residuals(
+        self, display: Float[Array, "H W 3"], source: Float[Array, "H W 3"] | None = None
+    ) -> Float[Array, " m"]:
+        return jnp.concatenate([t.residuals_for(display, source) for t in self.targets])
 
 
 __all__ = [

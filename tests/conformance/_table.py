@@ -685,7 +685,12 @@ _TARGETS = {
     "Histogram": lambda: ht.Histogram(np.full(8, 1 / 8)),
     "Scaled": lambda: 2.0 * ht.MeanLuminance(0.18),
     "Combined": lambda: ht.MeanLuminance(0.18) + ht.ClippedFraction(0.01),
+    "TMQI": lambda: ht.TMQI(),
+    "Naturalness": lambda: ht.Naturalness(),
 }
+_METRIC_TARGETS = {"TMQI": (0.0, 1.0), "Naturalness": (0.0, 1.0), "PUSSIM": (0.0, 2.0)}
+"""Targets ``weight · (1 − metric)``: their residuals' range (TMQI's Q, N in [0, 1]; SSIM
+in [−1, 1])."""
 TARGET_CLASSES = sorted(
     n
     for n in dir(ht)
@@ -698,16 +703,20 @@ TARGET_CLASSES = sorted(
 for _name in TARGET_CLASSES:
     if _name == "Reference":
         _make = (lambda: lambda x: ht.Reference(jnp.full(x.shape, 0.5, _fdt(x))))()
+    elif _name == "PUSSIM":  # a grey reference rendition in cd/m²
+        _make = (lambda: lambda x: ht.PUSSIM(jnp.full(x.shape, _GREY, _fdt(x))))()
     else:
         _make = (lambda m: lambda x: m())(_TARGETS[_name])  # KeyError: add the new target
     CASES[f"targets.{_name}"] = Case(
-        # targets take display images: x / (1 + |x|) puts every family in (-1, 1)
-        lambda x, mk=_make: mk(x).residuals(x / (1 + jnp.abs(x))),
+        # targets take display images: x / (1 + |x|) puts every family in (-1, 1); x is
+        # the source image of the targets that take one (TMQI)
+        lambda x, mk=_make: mk(x).residuals_for(x / (1 + jnp.abs(x)), x),
         (f"hdrjax.targets.{_name}", "hdrjax.targets.AbstractTarget"),
         reach="stat",
         # documented: percentiles of the positive display luminance; an all-black display
         # has none (NaN statistics)
         nonfinite_ok=no_light if _name == "Percentiles" else None,
+        out_range=_METRIC_TARGETS.get(_name),
     )
 
 
@@ -975,6 +984,16 @@ _PARAMS: dict[str, tuple[tuple[str, Callable], ...]] = {
     ),
     "targets.MeanLuminance": (("value", lambda x: ht.MeanLuminance(-0.2).residuals(x)),),
     "targets.Reference": (("space", lambda x: ht.Reference(x, space="rgb").residuals(x)),),
+    "targets.TMQI": (
+        ("source", lambda x: ht.TMQI().residuals(x)),
+        ("gamma", lambda x: ht.TMQI(gamma=0.0).residuals(x, source=x)),
+    ),
+    "targets.Naturalness": (("gamma", lambda x: ht.Naturalness(gamma=-2.2).residuals(x)),),
+    "targets.PUSSIM": (
+        ("black", lambda x: ht.PUSSIM(x, black=200.0).residuals(x)),
+        ("params", lambda x: ht.PUSSIM(x, params="pu08").residuals(x)),
+        ("display", lambda x: ht.PUSSIM(x[:-1]).residuals(x)),
+    ),
 }
 _PARAMS["metrics.pu21_encode"] = (("params", lambda x: hm.pu21_encode(x, params="pu08")),)
 _PARAMS["metrics.pu_psnr"] = (("params", lambda x: hm.pu_psnr(x, x, params="pu08")),)

@@ -22,6 +22,7 @@ from ..conftest import DATA
 # output path (None: the command writes nothing by default)
 ARGV = {
     "batch": (["-o", "OUTDIR", "--format", "png"], "OUTDIR"),
+    "compare": (["-o", "OUT.html", "--methods", "drago2003", "--max-size", "32"], "OUT.html"),
     "desaturate": (["-o", "OUT.exr"], "OUT.exr"),
     "export": (["-o", "OUT.png"], "OUT.png"),
     "falsecolor": (["-o", "OUT.png", "--legend", "none"], "OUT.png"),
@@ -120,6 +121,7 @@ CORNELL = DATA / "cornell_box.exr"
 UNKNOWN_METHOD = {
     "tonemap": (["-o", "OUT.png", "--method", "nope"], "nope"),
     "batch": (["-o", "OUTDIR", "--method", "nope"], "nope"),
+    "compare": (["-o", "OUT.html", "--methods", "drago2003,nope"], "nope"),
     "fit": (["-o", "OUT.png", "--method", "nope", "--target", "mean=0.2"], "nope"),
     "filter": (["-o", "OUT.exr", "--median", "3", "--criterion", "nope"], "nope"),
     "lights": (["--method", "nope"], "nope"),
@@ -139,6 +141,7 @@ INVALID_PARAMETER = {
     "export": (["-o", "OUT.png", "--bits", "12"], "--bits"),
     "fit": (["-o", "OUT.png", "--target", "mean=abc"], "mean"),
     "batch": (["-o", "OUTDIR", "--key", "-1"], "--key"),
+    "compare": (["-o", "OUT.html", "--max-size", "0"], "--max-size"),
 }
 
 

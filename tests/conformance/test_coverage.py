@@ -123,6 +123,12 @@ EXEMPT = {
     "hdrjax.study.sweep": "parameter sweep over an operator (tests/fit/test_study.py)",
     "hdrjax.study.plot_sweep": "matplotlib figure (tests/fit/test_study.py)",
     "hdrjax.study.SweepResult": "result container of sweep (tests/fit/test_study.py)",
+    # comparison report: runs registered operators and hdrjax.metrics (both conformance
+    # cases) over one image and tabulates them; NaN pixels in tests/report/test_compare.py
+    "hdrjax.report.compare": "report over operators (tests/report/test_compare.py)",
+    "hdrjax.report.ComparisonTable": "result container of compare (tests/report/)",
+    "hdrjax.report.ComparisonRow": "row record of ComparisonTable (tests/report/)",
+    "hdrjax.report.fit_target": "name lookup of compare's fit (tests/report/)",
     # fitting: optimistix solves over an operator; owned and tested in tests/fit/
     "hdrjax.fit.fit": "solver (tests/fit/test_fit.py)",
     "hdrjax.fit.fit_batch": "solver (tests/fit/test_fit.py)",

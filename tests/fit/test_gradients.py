@@ -52,14 +52,28 @@ NOT_DIFFERENTIABLE = {
     "n_bins": "ward1997: histogram size (integer)",
     "ceiling": "ward1997: choice of the linear or human-contrast ceiling (string)",
     "compat": "choice of the peer whose departures from the paper are reproduced (string)",
+    "display": "mantiuk2008: choice of pfstmo's named display (string)",
+    "visual_model": "mantiuk2008: choice of the visual model's components (string)",
+    "tol": "an iterative solver's stopping tolerance (a static float)",
     "sigma_s": "durand2002: spatial scale; sets the integer kernel radius and the halo",
     "max_segments": "durand2002: static bound on the bilateral filter's segments (integer)",
+    "detail_level": "fattal2002: number of pyramid levels left unattenuated (integer)",
+    "black_point": "fattal2002: percent of pixels below black; static, it sizes the percentile's"
+    " partial selection",
+    "white_point": "fattal2002: percent of pixels above white; static, it sizes the percentile's"
+    " partial selection",
+    "s_max": "ashikhmin2002: number of blur scales (integer)",
+    "threshold": "ashikhmin2002: threshold of the discrete scale selection",
+    "sigma": "chiu1993: blur scale in pixels; sets the integer kernel width and the halo",
+    "passes": "chiu1993: number of smoothing passes (integer)",
+    "glare_size": "chiu1993: glare kernel width in pixels (integer)",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
 # exactly 0 rather than against central differences.
 DISCRETE = {
     ("reinhard2002_auto", "local"): "the local/global choice (1 or 0) of the JGT switch",
+    ("mantiuk2008", "white_y"): "selects the curve node pulled to the display's peak",
 }
 
 # Vector parameters only some of whose elements reach the output on the test image: an
@@ -69,6 +83,7 @@ SPARSE = {
     ("mai2011", "curve"): "tone-curve nodes outside the image's luminances (and below"
     " pfstmo's floor of 1e-5) map no pixel",
     ("ward1997", "cdf"): "tone-curve points between the bins the image's luminances fill",
+    ("mantiuk2008", "curve"): "tone-curve nodes outside the image's luminances map no pixel",
 }
 
 R2004 = dict(f=0.5, m=0.6, a=0.3, c=0.4, channel_average=[0.2, 0.3, 0.25], log_average=0.05,
@@ -80,11 +95,21 @@ R2004 = dict(f=0.5, m=0.6, a=0.3, c=0.4, channel_average=[0.2, 0.3, 0.25], log_a
 CASES = [
     ("aces_hill", dict(exposure=0.5), ("exposure",)),
     ("aces_narkowicz2015", dict(exposure=0.5), ("exposure",)),
+    (
+        "ashikhmin2002",
+        dict(L_dmax=90.0, L_min=1e-3, L_max=20.0),
+        ("L_dmax", "L_min", "L_max"),
+    ),
     ("agx", dict(exposure=0.5), ("exposure",)),
     (
         "drago2003",
         dict(bias=0.8, L_dmax=90.0, log_average=0.05, L_max=12.0),
         ("bias", "L_dmax", "log_average", "L_max"),
+    ),
+    (
+        "fattal2002",
+        dict(alpha=1.2, beta=0.85, gamma=0.7, saturation=0.6, noise=0.01),
+        ("alpha", "beta", "gamma", "saturation", "noise"),
     ),
     (
         "durand2002",
@@ -99,6 +124,7 @@ CASES = [
         ),
         ("sigma_r", "base_contrast", "saturation", "L_min", "L_max", "L_low", "L_high"),
     ),
+    ("chiu1993", dict(k=6.0, glare=0.7, glare_power=6.0), ("k", "glare", "glare_power")),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0), ("L_wa", "L_dmax")),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0, compat="hdrtoolbox"), ("L_wa", "L_dmax")),
     (
@@ -212,6 +238,24 @@ CASES = [
         ("display_adaptation", "A_cone", "A_rod"),
     ),
     ("mai2011", dict(curve=np.linspace(0.0, 0.95, 151) ** 0.8 + 0.01), ("curve",)),
+    (
+        "mantiuk2008",
+        dict(
+            curve=np.linspace(-0.05, 2.0, 161) + 0.1 * np.sin(np.linspace(0.0, 6.0, 161)),
+            gamma=2.4,
+            peak=150.0,
+            black=0.5,
+            ambient=40.0,
+            reflectivity=0.02,
+            saturation=0.9,
+        ),
+        ("curve", "gamma", "peak", "black", "ambient", "reflectivity", "saturation"),
+    ),
+    (  # through the solver's fixed point (converged: the gradient is the fixed point's)
+        "mantiuk2008",
+        dict(contrast_enhancement=1.2, scene_luminance=500.0, white_y=0.5, tol=1e-10),
+        ("contrast_enhancement", "scene_luminance", "white_y"),
+    ),
     (
         "ward1997",
         dict(
