@@ -81,14 +81,14 @@ def register(subparsers) -> None:
 
 
 def _check_paths(args: argparse.Namespace) -> None:
+    outputs = [args.output, args.json_path]
+    refuse_overwriting_inputs(outputs, [args.input, args.reference])  # first, as every command
     if os.path.splitext(args.output)[1].lower() not in HTML_EXT:
         raise UsageError(f"{args.output}: expected an .html file for -o")
-    outputs = [args.output, args.json_path]
     if args.json_path is not None and os.path.abspath(args.json_path) == os.path.abspath(
         args.output
     ):
         raise UsageError(f"{args.json_path}: --json and -o name the same file")
-    refuse_overwriting_inputs(outputs, [args.input, args.reference])
     for path in outputs:
         if path is None:
             continue

@@ -26,6 +26,9 @@ CASES = {
     "lights": (["lights", "{P}", "-o", "{OUT}"], "x.png"),
     "lights json": (["lights", "{P}", "--json", "{OUT}"], "x.json"),
     "measure": (["measure", "{P}", "--rect", "0,0,2,2", "--region-out", "{OUT}"], "x.json"),
+    "compare": (["compare", "{P}", "-o", "{OUT}", "--methods", "linear"], "x.hdr"),
+    "compare json": (["compare", "{P}", "-o", "r.html", "--json", "{OUT}"], "x.exr"),
+    "compare reference": (["compare", "scene.exr", "--reference", "{P}", "-o", "{OUT}"], "x.png"),
     # batch: the output folder holds the input frame under its output name
     "batch": (["batch", "{P}", "-o", "{OUT}", "--format", "exr", "--no-resume"], "frames/a.exr"),
     "batch folder": (["batch", "{P}", "-o", "{OUT}"], "x.exr"),  # -o names an input file

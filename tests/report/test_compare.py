@@ -220,7 +220,8 @@ def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
     [
         (["IMG", "--methods", "reinhard2002,nope", "-o", "OUT"], 2, "--methods: unknown operator"),
         (["BAD", "--methods", "reinhard2002", "-o", "OUT"], 1, "bad.hdr"),
-        (["IMG", "--methods", "reinhard2002", "-o", "IMG"], 2, "expected an .html file"),
+        (["IMG", "--methods", "reinhard2002", "-o", "IMG"], 2, "output is the input file"),
+        (["IMG", "--methods", "reinhard2002", "-o", "r.png"], 2, "expected an .html file"),
         (["IMG", "-o", "OUT", "--json", "IMG"], 2, "output is the input file"),
         (["IMG", "-o", "OUT", "--json", "OUT"], 2, "--json and -o name the same file"),
         (["IMG", "-o", "OUT", "--reference", "IMG2"], 1, "no such file"),
