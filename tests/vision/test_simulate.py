@@ -330,14 +330,20 @@ def test_real_image_tree_in_absolute_units():
 # -- composition with every tone-mapping operator -----------------------------------------
 
 
-def test_composes_with_every_registered_operator():
+def test_composes_with_operators():
+    """simulate returns a plain finite, non-negative float32 image of the input's shape: the
+    domain every registered operator is tested on (tests/operators/test_conformance.py runs
+    each over hard finite images), so three operators of different kinds stand for them all
+    here (each one compiled is ~1 s of the suite)."""
     import hdrjax
 
-    from ..operators.cases import EXTRA, natural
+    from ..operators.cases import natural
 
     img = natural() * 0.05  # (12, 16) lognormal scene, as a dim interior in cd/m²
     out, rep = hv.simulate(img, 10.0, ("acuity", "glare", "colour_loss"), scale=1.0)
-    assert out.shape == img.shape and out.dtype == np.float32
-    for name in hdrjax.operator_names():
-        shown = np.asarray(hdrjax.tonemap(out, name, **EXTRA.get(name, {})))
+    assert isinstance(out, jax.Array) and out.shape == img.shape and out.dtype == np.float32
+    assert np.isfinite(out).all() and (np.asarray(out) >= 0).all()
+    for name in ("reinhard2002", "drago2003", "durand2002"):
+        shown = np.asarray(hdrjax.tonemap(out, name))
         assert shown.shape == img.shape and np.isfinite(shown).all(), name
+        assert 0.0 < shown.mean() < 1.0, name
