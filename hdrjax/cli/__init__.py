@@ -25,7 +25,13 @@ __all__ = ["CLIError", "DataError", "UsageError", "build_parser", "load_plugins"
 
 class _Parser(argparse.ArgumentParser):
     """argparse with the command line's error form: one line on stderr, exit status 2
-    (argparse's default prints the whole usage block first)."""
+    (argparse's default prints the whole usage block first), and no abbreviated options
+    (``--exposure`` must not silently stand for ``--exposure-time``). Subcommands' parsers
+    are made by this class too."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str):  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())}\n")
@@ -36,6 +42,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="hdrjax",
         description="HDR tone mapping and analysis for lighting simulation and photography.",
     )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"hdrjax {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers.required = True
     for name in _command_modules():
@@ -143,6 +152,12 @@ def _run(args: argparse.Namespace) -> int:
         return e.exit_code
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:
+        # the reader went away (``hdrjax info x.exr | head``): stop quietly, and point
+        # standard output at /dev/null so that the interpreter's final flush does not fail
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except (OSError, ValueError) as e:
         # what a subcommand did not translate: file-system failures (permissions, a full
         # disk) and validation errors from the library; still one line, never a traceback

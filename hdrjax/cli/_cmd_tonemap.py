@@ -2,6 +2,7 @@
 
 import argparse
 import dataclasses
+import math
 import os
 import time
 from typing import Any
@@ -42,6 +43,14 @@ def register(subparsers) -> None:
     add_table_and_scale_arguments(p)
     add_colour_arguments(p)
     add_encoding_arguments(p)
+    p.add_argument(
+        "--exposure",
+        type=float,
+        default=0.0,
+        metavar="EV",
+        help="exposure compensation in stops before tone mapping: the input times 2^EV "
+        "(with --scale, both apply)",
+    )
     p.add_argument("-v", "--verbose", action="store_true", help="print timings too")
     p.set_defaults(func=run)
 
@@ -471,11 +480,25 @@ def load_native(path: str, scale: float = 1.0, args: argparse.Namespace | None =
     return img, (native * np.float32(scale) if scale != 1.0 else native), None
 
 
+def exposure_scale(args: argparse.Namespace) -> float:
+    """``--scale`` × 2^``--exposure``; a factor that is not a positive finite float32 (an
+    exposure of ±200 stops, say) is a usage error naming ``--exposure``."""
+    try:
+        factor = args.scale * 2.0**args.exposure
+    except OverflowError:
+        factor = math.inf
+    if not (math.isfinite(args.exposure) and 1e-38 < factor < 3e38):
+        raise UsageError(
+            f"--exposure: expected stops that keep the image in float32 range, got {args.exposure}"
+        )
+    return factor
+
+
 def run(args: argparse.Namespace) -> int:
     check_output(args)
     op = build_operator(args)
     t0 = time.perf_counter()
-    img, rgb, m = load_native(args.input, args.scale, args)
+    img, rgb, m = load_native(args.input, exposure_scale(args), args)
     t_read = time.perf_counter() - t0
 
     import numpy as np

@@ -177,3 +177,67 @@ def test_luminance_uses_the_files_primaries(tmp_path, capsys):
     np.testing.assert_allclose(in_ap0, (0.34397, 0.72817, -0.07213), atol=5e-6)
     assert main(["tonemap", carrots, "-o", str(tmp_path / "c.png")]) == 0
     assert "converted to sRGB (CAT02)" in capsys.readouterr().out
+
+
+def test_version_is_the_packages(capsys):
+    import hdrjax
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"hdrjax {hdrjax.__version__}"
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["tonemap", CORNELL, "-o", "x.png", "--exposure-t", "2"], ["info", CORNELL, "--sca", "2"]],
+)
+def test_abbreviated_options_are_refused(tmp_path, capsys, argv):
+    """``--exposure-t`` is not taken for ``--exposure-time`` (argparse's default would)."""
+    argv = [str(tmp_path / a) if a == "x.png" else a for a in argv]
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and "unrecognized arguments" in err and err.count("\n") == 1
+
+
+def test_exposure_scales_the_input_in_stops(tmp_path, capsys):
+    """``--exposure 1`` doubles the input: with a fixed white (linear, L_max) the display
+    values double below white; ``--exposure 1 --scale 0.5`` is the identity."""
+    outs = {}
+    for name, extra in [
+        ("a", []),
+        ("b", ["--exposure", "1"]),
+        ("c", ["--exposure", "1", "--scale", "0.5"]),
+    ]:
+        out = tmp_path / f"{name}.exr"
+        argv = ["tonemap", CORNELL, "-o", str(out), "--method", "linear", "--L-max", "100"]
+        assert main(argv + extra) == 0
+        outs[name] = np.asarray(read(out).rgb())
+    np.testing.assert_allclose(outs["b"], 2 * outs["a"], rtol=1e-6)
+    np.testing.assert_array_equal(outs["c"], outs["a"])
+    capsys.readouterr()
+    for ev in ("nan", "200", "-200"):
+        assert main(["tonemap", CORNELL, "-o", str(tmp_path / "d.png"), "--exposure", ev]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("hdrjax tonemap: error: --exposure:") and err.count("\n") == 1
+
+
+def test_a_closed_pipe_ends_quietly():
+    """``hdrjax info x.exr | head``: the reader has gone, so no traceback and no error line
+    (the read end is closed before the command starts: every write fails)."""
+    import os
+
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "hdrjax", "info", CORNELL],
+            stdout=w,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "HDRJAX_CACHE": "0"},
+        )
+    finally:
+        os.close(w)
+    assert done.returncode == 141 and done.stderr == ""
