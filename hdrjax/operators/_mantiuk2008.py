@@ -600,6 +600,44 @@ def contrast_distortion(
     return jnp.sum(Nd * (T - prob.row_B[:n_data]) ** 2) / jnp.where(total > 0, total, 1.0)
 
 
+def rendition_curve(
+    L: Float[ArrayLike, "H W"], L_d: Float[ArrayLike, "H W"], valid: Array
+) -> Float[Array, " 161"]:
+    """The tone curve a rendition shows: at each node ``i`` (``log10 L = −8 + δ i``), the
+    ``log10`` display luminance ``L_d`` that a straight line fitted (least squares, in
+    ``log10 L``) to the ``valid`` pixels nearest the node gives at the node — their mean
+    when they do not spread around it; nodes without pixels are interpolated linearly
+    between their nearest nodes with pixels (held flat beyond them). For a global operator
+    this is its curve, sampled; for a local one, its average mapping."""
+    L = jnp.asarray(L)
+    u = (jnp.log10(jnp.clip(jnp.where(valid, L, 1.0), L_FLOOR, L_CEIL)) - LOG_MIN) / DELTA
+    node = jnp.clip(jnp.floor(u + 0.5), 0, NODES - 1)
+    d = jnp.where(valid, u - node, 0.0).reshape(-1)
+    i = jnp.where(valid, node.astype(jnp.int32), NODES).reshape(-1)
+    y = jnp.log10(jnp.where(valid, L_d, 1.0)).reshape(-1)
+
+    def total(x):
+        return jax.ops.segment_sum(x, i, NODES + 1)[:NODES]
+
+    n, s1, s2 = total(jnp.ones_like(y)), total(d), total(d * d)
+    t0, t1 = total(y), total(y * d)
+    has = n > 0
+    mean = t0 / jnp.where(has, n, 1.0)
+    # the line's value at the node, where the pixels' spread in d determines it
+    det = n * s2 - s1 * s1
+    line = det > 1e-3 * jnp.square(n)
+    at_node = (t0 * s2 - t1 * s1) / jnp.where(line, det, 1.0)
+    value = jnp.where(line, at_node, mean)
+    nodes = jnp.arange(NODES)
+    before = jax.lax.cummax(jnp.where(has, nodes, -1))
+    after = jax.lax.cummin(jnp.where(has, nodes, NODES), reverse=True)
+    lo = jnp.where(before >= 0, before, after).clip(0, NODES - 1)
+    hi = jnp.where(after < NODES, after, before).clip(0, NODES - 1)
+    span = jnp.where(hi > lo, hi - lo, 1).astype(value.dtype)
+    t = jnp.clip((nodes - lo) / span, 0.0, 1.0)
+    return jnp.where(has, value, value[lo] + t * (value[hi] - value[lo]))
+
+
 def _display_field(help: str, unit: str, range: str) -> object:
     return parameter(None, help=f"{help}; None: the display's", unit=unit, range=range)
 
@@ -729,6 +767,42 @@ class Mantiuk2008(AbstractOperator):
         own = (self.gamma, self.peak, self.black, self.ambient, self.reflectivity)
         return Display(*(n if v is None else v for n, v in zip(named, own, strict=True)))
 
+    def visible_distortion(
+        self, hdr: Float[ArrayLike, "H W 3"], ldr: Float[ArrayLike, "H W 3"]
+    ) -> Float[Array, ""]:
+        """The visible contrast distortion (paper Eq. 9–10, the quantity this operator
+        minimises) of any rendition ``ldr`` of the scene ``hdr`` on this operator's display.
+
+        ``hdr``: linear RGB in cd/m²; ``ldr``: display-encoded values ``v`` in [0, 1] for the
+        display model (what :mod:`hdrjax.display` writes for an sRGB display). The display
+        luminance is ``L_d = Σ_c w_c v_c^γ (L_max − L_black) + L_black + k E_amb / π``; the
+        rendition's curve is :func:`rendition_curve`; the statistics are the scene's
+        (:func:`conditional_density`, constants); ``curve``, ``white_y`` and ``tol`` play no
+        part. Squared transducer units (JND²), per counted contrast. Differentiable with
+        respect to ``ldr`` and the display parameters.
+        """
+        rgb = jnp.asarray(hdr)
+        v = jnp.clip(jnp.asarray(ldr, rgb.dtype), 0.0, 1.0)
+        w = jnp.asarray(self.weights, rgb.dtype)
+        finite = jnp.all(jnp.isfinite(rgb), axis=-1) & jnp.all(jnp.isfinite(v), axis=-1)
+        rgb = jnp.where(finite[..., None], rgb, 0.0)
+        v = jnp.where(finite[..., None], v, 0.0)
+        L = rgb @ w
+        disp = self.display_model()
+        pos = v > 0
+        lin = jnp.where(pos, jnp.power(jnp.where(pos, v, 1.0), disp.gamma), 0.0)
+        L_d = (lin @ w) * (disp.peak - disp.black) + disp.offset
+        valid = finite & (L > 0)
+        density = conditional_density(L, valid)
+        y = rendition_curve(L, L_d, valid)
+        return contrast_distortion(
+            y,
+            density,
+            enhancement=self.contrast_enhancement,
+            scene_luminance=self.scene_luminance,
+            visual_model=self.visual_model,
+        )
+
     def halo(self, shape: tuple[int, ...]) -> tuple[float, float]:
         """0 once ``curve`` is set; else the whole image (infinite)."""
         del shape
@@ -792,5 +866,6 @@ __all__ = [
     "Mantiuk2008",
     "conditional_density",
     "contrast_distortion",
+    "rendition_curve",
     "tone_curve",
 ]

@@ -594,6 +594,14 @@ CASES["metrics.tmqi"] = Case(
     batch=True,
     out_range=(0.0, 1.0),
 )
+CASES["metrics.contrast_distortion"] = Case(
+    # the rendition: x / (1 + |x|) as display values; NaN/Inf pixels are left out
+    lambda x: hm.contrast_distortion(_cd(x), x / (1 + jnp.abs(x))),
+    ("hdrjax.metrics.contrast_distortion",),
+    reach="stat",
+    batch=True,
+    out_range=(0.0, float("inf")),
+)
 
 # the operators' automatic estimates as functions: every public function of hdrjax.estimate
 for _name in hdrjax.estimate.__all__:
@@ -1002,6 +1010,11 @@ _PARAMS["metrics.log_psnr"] = (("floor", lambda x: hm.log_psnr(x, x, floor=-1e-5
 _PARAMS["metrics.mpsnr"] = (("span", lambda x: hm.mpsnr(x, x, span=0)),)
 _PARAMS["metrics.tmqi"] = (("ldr", lambda x: hm.tmqi(x, x[..., :-1, :])),)
 _PARAMS["metrics.delta_e_itp"] = (("b", lambda x: hm.delta_e_itp(x, x[:1])),)
+_PARAMS["metrics.contrast_distortion"] = (
+    ("ldr", lambda x: hm.contrast_distortion(x, x[..., :-1, :])),
+    ("display", lambda x: hm.contrast_distortion(x, x, display="oled")),
+    ("visual_model", lambda x: hm.contrast_distortion(x, x, visual_model="csf,masking")),
+)
 for _n in CASES:
     if _n.startswith("filters."):
         f = hf.mean_filter if "mean" in _n else hf.median_filter
