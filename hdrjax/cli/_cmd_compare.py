@@ -29,6 +29,11 @@ def register(subparsers) -> None:
     p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
     p.add_argument("-o", "--output", required=True, help="the report: an .html file")
     p.add_argument("--json", dest="json_path", help="also write the table's numbers as JSON")
+    p.add_argument(
+        "--sheet",
+        metavar="FILE",
+        help="also write a contact sheet of the renditions with their scores (.png)",
+    )
     which = p.add_mutually_exclusive_group()
     which.add_argument(
         "--methods",
@@ -81,14 +86,15 @@ def register(subparsers) -> None:
 
 
 def _check_paths(args: argparse.Namespace) -> None:
-    outputs = [args.output, args.json_path]
+    outputs = [args.output, args.json_path, args.sheet]
     refuse_overwriting_inputs(outputs, [args.input, args.reference])  # first, as every command
     if os.path.splitext(args.output)[1].lower() not in HTML_EXT:
         raise UsageError(f"{args.output}: expected an .html file for -o")
-    if args.json_path is not None and os.path.abspath(args.json_path) == os.path.abspath(
-        args.output
-    ):
-        raise UsageError(f"{args.json_path}: --json and -o name the same file")
+    if args.sheet is not None and os.path.splitext(args.sheet)[1].lower() != ".png":
+        raise UsageError(f"{args.sheet}: expected a .png file for --sheet")
+    named = [os.path.abspath(p) for p in outputs if p is not None]
+    if len(set(named)) < len(named):
+        raise UsageError("-o, --json and --sheet must name different files")
     for path in outputs:
         if path is None:
             continue
@@ -150,7 +156,14 @@ def run(args: argparse.Namespace) -> int:
 
     page = table.to_html().encode("utf-8")
     doc = table.to_json().encode("utf-8") if args.json_path else None
-    for path, data in ((args.json_path, doc), (args.output, page)):
+    sheet = None
+    if args.sheet:
+        import io
+
+        buffer = io.BytesIO()
+        table.figure().savefig(buffer, format="png", dpi=100)
+        sheet = buffer.getvalue()
+    for path, data in ((args.json_path, doc), (args.sheet, sheet), (args.output, page)):
         if path is None or data is None:
             continue
         try:
@@ -168,7 +181,8 @@ def run(args: argparse.Namespace) -> int:
         )
     for name, reason in table.skipped.items():
         print(f"{name:<24} not compared: {reason}")
-    if args.json_path:
-        print(f"wrote: {args.json_path}")
+    for path in (args.json_path, args.sheet):
+        if path:
+            print(f"wrote: {path}")
     print(f"wrote: {args.output}")
     return 0

@@ -248,6 +248,50 @@ class ComparisonTable:
     def _repr_html_(self) -> str:
         return render_fragment(self)
 
+    def figure(self, *, columns: int | None = None, width: float = 12.0):
+        """A contact sheet of the renditions in the table's order: a matplotlib
+        :class:`~matplotlib.figure.Figure` (no pyplot state), each panel captioned with its
+        rank, method, TMQI ``Q`` (``S``, ``N``), PU-SSIM when there is a reference, clipped
+        pixels and warm time. ``columns``: panels per row (default: up to 4); ``width`` in
+        inches. Raises ``ValueError`` for a table without renditions (read from JSON)."""
+        from matplotlib.figure import Figure
+
+        if not self.rows or any(r.rendition is None for r in self.rows):
+            raise ValueError(
+                "figure: the table has no renditions (a table read from JSON keeps only "
+                "the numbers)"
+            )
+        n = len(self.rows)
+        cols = max(1, min(columns or 4, n))
+        if columns is not None and columns < 1:
+            raise ValueError(f"columns: expected a positive integer, got {columns}")
+        rows = -(-n // cols)
+        h, w = self.rows[0].rendition.shape[:2]
+        panel = width / cols
+        fig = Figure(figsize=(width, rows * (panel * h / w + 0.75)), layout="constrained")
+        axes = fig.subplots(rows, cols, squeeze=False)
+        for k, ax in enumerate(axes.flat):
+            ax.set_axis_off()
+            if k >= n:
+                continue
+            r = self.rows[k]
+            ax.imshow(r.rendition, interpolation="lanczos")
+            lines = [f"{k + 1}. {r.method}"]
+            if r.q is not None:
+                lines.append(f"Q {r.q:.3f} (S {r.s:.3f}, N {r.n:.3f})")
+            extra = [] if r.pu_ssim is None else [f"PU-SSIM {r.pu_ssim:.3f}"]
+            if r.clipped is not None:
+                extra.append(f"clipped {100 * r.clipped:.1f} %")
+            if r.warm_s is not None:
+                extra.append(f"{1e3 * r.warm_s:.3g} ms")
+            if extra:
+                lines.append(" · ".join(extra))
+            ax.set_title("\n".join(lines), fontsize=9, loc="left")
+        title = self.source or "image"
+        fit = f", fitted to maximise {self.fit}" if self.fit else ""
+        fig.suptitle(f"{title} ({self.shape[1]}×{self.shape[0]}){fit}", fontsize=11)
+        return fig
+
 
 def fit_target(name: str):
     """The :mod:`hdrjax.targets` target that ``compare(..., fit=name)`` maximises.

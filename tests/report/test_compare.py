@@ -146,6 +146,21 @@ def test_html_is_self_contained_and_lists_every_method(table):
     assert "http" not in fragment and all(f">{m}</td>" in fragment for m in METHODS)
 
 
+def test_contact_sheet_shows_every_rendition_with_its_scores(table):
+    fig = table.figure(columns=2)
+    shown = [ax for ax in fig.axes if ax.images]
+    assert len(shown) == len(table) and len(fig.axes) == 2 * -(-len(table) // 2)
+    for ax, row in zip(shown, table, strict=True):
+        title = ax.get_title(loc="left")
+        assert title.startswith(f"{shown.index(ax) + 1}. {row.method}\n")
+        assert f"Q {row.q:.3f}" in title and f"PU-SSIM {row.pu_ssim:.3f}" in title
+        np.testing.assert_array_equal(ax.images[0].get_array(), row.rendition)
+    with pytest.raises(ValueError, match="no renditions"):
+        ComparisonTable.from_json(table.to_json()).figure()
+    with pytest.raises(ValueError, match="columns"):
+        table.figure(columns=0)
+
+
 def test_json_round_trips(table):
     text = table.to_json()
     back = ComparisonTable.from_json(text)
@@ -197,11 +212,15 @@ def test_nan_pixels_leave_the_scores_finite(rgb):
 
 
 def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
-    out, js = tmp_path / "report.html", tmp_path / "report.json"
+    out, js, sheet = tmp_path / "report.html", tmp_path / "report.json", tmp_path / "s.png"
     argv = ["compare", str(image_file), "--methods", "drago2003,reinhard2002", "-o", str(out)]
-    assert main([*argv, "--json", str(js), "--repeats", "2"]) == 0
+    assert main([*argv, "--json", str(js), "--sheet", str(sheet), "--repeats", "2"]) == 0
     text = capsys.readouterr().out
-    assert f"wrote: {out}" in text and f"wrote: {js}" in text
+    assert f"wrote: {out}" in text and f"wrote: {js}" in text and f"wrote: {sheet}" in text
+    from PIL import Image
+
+    with Image.open(sheet) as im:  # two panels side by side, 12 inches at 100 dpi
+        assert im.format == "PNG" and im.size[0] == 1200
     doc = json.loads(js.read_text())
     assert [r["method"] for r in doc["rows"]] == sorted(
         ["drago2003", "reinhard2002"], key=lambda m: -table[m].q
@@ -210,7 +229,7 @@ def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
         assert r["q"] == pytest.approx(table[r["method"]].q, abs=ATOL_METRIC)
     page = out.read_text()
     assert "drago2003" in page and "reinhard2002" in page and "https:" not in page
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["report.html", "report.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report.html", "report.json", "s.png"]
 
 
 @pytest.mark.parametrize(
@@ -221,8 +240,14 @@ def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
         (["IMG", "--methods", "reinhard2002", "-o", "IMG"], 2, "output is the input file"),
         (["IMG", "--methods", "reinhard2002", "-o", "r.png"], 2, "expected an .html file"),
         (["IMG", "-o", "OUT", "--json", "IMG"], 2, "output is the input file"),
-        (["IMG", "-o", "OUT", "--json", "OUT"], 2, "--json and -o name the same file"),
+        (
+            ["IMG", "-o", "OUT", "--json", "OUT"],
+            2,
+            "-o, --json and --sheet must name different files",
+        ),
         (["IMG", "-o", "OUT", "--reference", "IMG2"], 1, "no such file"),
+        (["IMG", "-o", "OUT", "--sheet", "s.jpg"], 2, "expected a .png file for --sheet"),
+        (["IMG", "-o", "OUT", "--sheet", "IMG"], 2, "output is the input file"),
     ],
 )
 def test_cli_errors_are_one_line_and_write_nothing(
