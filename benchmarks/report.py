@@ -669,19 +669,115 @@ def _plt():
     return plt
 
 
+def _log_tick_labels(axis) -> None:
+    """Plain numbers on a log axis (``0.5``, ``2``, ``1e-05``), the decades labelled and, on an
+    axis spanning less than two decades, also 2× and 5× each decade (no crowded ``3×10^0``)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    lo, hi = sorted(axis.get_view_interval())
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    if hi > 0 and lo > 0 and math.log10(hi / lo) < 2:
+        axis.set_minor_locator(LogLocator(base=10, subs=(2.0, 5.0)))
+        axis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    else:
+        axis.set_minor_formatter(NullFormatter())
+
+
+def _place_labels(ax, points: list[tuple[float, float, str, float]], fontsize: float = 8) -> None:
+    """Annotate each data point with its text where it overlaps no other label, no marker,
+    the legend nor the axes' border: the first free place right or left of the point,
+    stepping up and down (with a thin leader line when it moved away); a label with no free
+    place goes where it overlaps least. ``points``: ``(x, y, text, marker radius in
+    points)``."""
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    to_px = fig.dpi / 72.0
+    frame = ax.get_window_extent(renderer)
+    taken, centres = [], []
+    for x, y, _, radius in points:
+        px, py = ax.transData.transform((x, y))
+        r = radius * to_px
+        taken.append((px - r, py - r, px + r, py + r))
+        centres.append((px, py))
+    legend = ax.get_legend()
+    if legend is not None:
+        b = legend.get_window_extent(renderer)
+        taken.append((b.x0, b.y0, b.x1, b.y1))
+    steps = [0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6, -6]
+    offsets = [(side * 5, 3 + k * (fontsize + 2)) for k in steps for side in (1, -1)]
+
+    def overlap(a, b) -> float:
+        w = min(a[2], b[2]) - max(a[0], b[0])
+        h = min(a[3], b[3]) - max(a[1], b[1])
+        return w * h if w > 0 and h > 0 else 0.0
+
+    for x, y, text, _ in points:
+        # the text's size once; each candidate place is then arithmetic
+        probe = ax.annotate(text, (x, y), fontsize=fontsize, ha="left", va="bottom")
+        size = probe.get_window_extent(renderer)
+        probe.remove()
+        w, h = size.width, size.height
+        px, py = ax.transData.transform((x, y))
+        best = None
+        for dx, dy in offsets:
+            x0 = px + dx * to_px - (w if dx < 0 else 0)
+            y0 = py + dy * to_px - (h if dy < 0 else 0)
+            box = (x0, y0, x0 + w, y0 + h)
+            outside = (
+                max(frame.x0 - box[0], 0)
+                + max(box[2] - frame.x1, 0)
+                + max(frame.y0 - box[1], 0)
+                + max(box[3] - frame.y1, 0)
+            ) * (w + h)
+            cost = outside + sum(overlap(box, t) for t in taken)
+            # a label nearer another point than its own would be read as that point's
+            ax_, ay_ = (box[0] if dx > 0 else box[2]), (box[1] + box[3]) / 2
+            own = (ax_ - px) ** 2 + (ay_ - py) ** 2
+            if any((ax_ - cx) ** 2 + (ay_ - cy) ** 2 < own for cx, cy in centres):
+                cost += 0.25 * w * h
+            if best is None or cost < best[0]:
+                best = (cost, dx, dy, box)
+            if cost == 0:
+                break
+        _, dx, dy, box = best
+        far = dy != offsets[0][1]  # moved up or down: a leader line to its point
+        ax.annotate(
+            text,
+            (x, y),
+            xytext=(dx, dy),
+            textcoords="offset points",
+            fontsize=fontsize,
+            ha="left" if dx > 0 else "right",
+            va="bottom" if dy >= 0 else "top",
+            arrowprops={
+                "arrowstyle": "-",
+                "lw": 0.5,
+                "color": "0.4",
+                "shrinkA": 0,
+                "shrinkB": 2,
+                "relpos": (0.0 if dx > 0 else 1.0, 0.5),
+            }
+            if far
+            else None,
+        )
+        taken.append(box)
+
+
 def accuracy_figure(curve: str, series: dict[str, list[dict]]):
     """Error vs time (log–log) of one curve; ``series``: ``{label: accuracy points}``.
 
     Points with error 0 (the reference itself) are drawn at a floor a decade below the
-    smallest positive error and labelled ``0``; the default setting is a large star.
+    smallest positive error and labelled ``0``; the default setting is a large star. Each
+    point is labelled with its setting where the label overlaps nothing else.
     """
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
     pos = [
         p["error"] for pts in series.values() for p in pts if _finite(p["error"]) and p["error"] > 0
     ]
     floor = min(pos) / 10 if pos else 1e-9
     markers = "osD^v"
+    labels = []
     for k, (label, pts) in enumerate(series.items()):
         pts = [p for p in pts if _finite(p["error"]) and _finite(p["time_s"]) and p["time_s"] > 0]
         pts.sort(key=lambda p: p["time_s"])
@@ -697,7 +793,7 @@ def accuracy_figure(curve: str, series: dict[str, list[dict]]):
             ax.plot(*zip(*front, strict=True), "--", color=line.get_color(), alpha=0.5, lw=1)
         for p, xi, yi in zip(pts, x, y, strict=True):
             text = p["setting"] + (" (0)" if p["error"] <= 0 else "")
-            ax.annotate(text, (xi, yi), fontsize=7, xytext=(4, 3), textcoords="offset points")
+            labels.append((xi, yi, text, 9.0 if p.get("default") else 4.0))
             if p.get("default"):
                 ax.plot(
                     [xi],
@@ -711,13 +807,22 @@ def accuracy_figure(curve: str, series: dict[str, list[dict]]):
                 )
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("time after compilation (ms)")
+    ax.margins(x=0.25, y=0.15)  # room for the labels of the outermost points
+    ax.set_xlabel("time after compilation (ms)", fontsize=9)
     kind = next((p.get("error_kind") for pts in series.values() for p in pts), "error")
-    ax.set_ylabel(kind, fontsize=8)
-    ax.set_title(curve + "\n(dashed: settings no other beats on both axes)", fontsize=9)
+    ax.set_ylabel(textwrap.fill(kind, 48, break_on_hyphens=False), fontsize=9)
+    ax.set_title(curve + "\n(dashed: settings no other beats on both axes)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
+    ax.tick_params(labelsize=8, which="both")
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    _log_tick_labels(ax.xaxis)
+    _log_tick_labels(ax.yaxis)
+    fig.tight_layout()  # the axes' size is now fixed; the legend's place too, once frozen
+    legend = ax.get_legend()
+    if legend is not None:
+        box = legend.get_window_extent(fig.canvas.get_renderer())
+        legend.set_loc(tuple(box.transformed(ax.transAxes.inverted()).p0))
+    _place_labels(ax, labels)
     return fig
 
 
