@@ -15,22 +15,18 @@ from ._cmd_tonemap import (
     add_set_argument,
     build_operator,
 )
-from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
+from ._common import (
+    DataError,
+    UsageError,
+    positive_float,
+    positive_int,
+    refuse_overwriting_inputs,
+)
 from ._registry import constant
 
 
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return v
-
-
 def _odd_size(text: str) -> int:
-    v = _positive_int(text)
+    v = positive_int(text)
     if v % 2 == 0:
         raise argparse.ArgumentTypeError(f"expected an odd window size, got {text!r}")
     return v
@@ -143,10 +139,10 @@ def register(subparsers) -> None:
         "frames must be in cd/m² (use --scale)",
     )
     p.add_argument(
-        "--batch-size", type=_positive_int, default=8, help="frames per compiled call (8)"
+        "--batch-size", type=positive_int, default=8, help="frames per compiled call (8)"
     )
     p.add_argument(
-        "--workers", type=_positive_int, help="start a local Dask cluster with N processes"
+        "--workers", type=positive_int, help="start a local Dask cluster with N processes"
     )
     p.add_argument(
         "--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786)"

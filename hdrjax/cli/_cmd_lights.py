@@ -5,20 +5,16 @@ import json
 import os
 import time
 
-from ._common import DataError, UsageError, positive_float, refuse_overwriting_inputs
+from ._common import (
+    DataError,
+    UsageError,
+    positive_float,
+    positive_int,
+    refuse_overwriting_inputs,
+)
 from ._registry import constant
 
 OVERLAY_EXT = (".png", ".jpg", ".jpeg", ".pdf", ".svg")
-
-
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return v
 
 
 def _non_negative_float(text: str) -> float:
@@ -62,13 +58,13 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--width",
-        type=_positive_int,
+        type=positive_int,
         default=width,
         help=f"working width in pixels (default {width})",
     )
     p.add_argument(
         "--samples",
-        type=_positive_int,
+        type=positive_int,
         help="quasi-Monte-Carlo samples (default 0.006 per working pixel)",
     )
     p.add_argument(
@@ -90,13 +86,13 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--max-lights",
-        type=_positive_int,
+        type=positive_int,
         default=max_lights,
         help=f"most lights reported (default {max_lights})",
     )
     p.add_argument(
         "--n-lights",
-        type=_positive_int,
+        type=positive_int,
         default=16,
         help="median cut: number of lights, a power of two (default 16)",
     )

@@ -33,6 +33,17 @@ class DataError(CLIError):
     exit_code = 1
 
 
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return v
+
+
 def positive_float(text: str) -> float:
     """argparse type: a finite float > 0."""
     try:

@@ -53,6 +53,7 @@ import hdrjax.batch as hb
 import hdrjax.display as hd
 import hdrjax.filters as hf
 import hdrjax.lights as hl
+import hdrjax.merge as hmerge
 import hdrjax.metrics as hm
 import hdrjax.panorama as hp
 import hdrjax.targets as ht
@@ -593,6 +594,18 @@ CASES["metrics.tmqi"] = Case(
     reach="stat",
     batch=True,
     out_range=(0.0, 1.0),
+)
+# an HDR image from a bracket, to cd/m²: by the exposure settings (a scale, per pixel) and
+# by a measured illuminance (a scale from the whole map's upper hemisphere)
+CASES["merge.calibrate"] = Case(
+    lambda x: hmerge.calibrate(x, f_number=8.0, iso=100.0),
+    ("hdrjax.merge.calibrate",),
+    batch=True,
+    accepts=EMPTY_PER_PIXEL,
+)
+CASES["merge.calibrate_illuminance"] = Case(
+    lambda x: hmerge.calibrate_illuminance(x, 20000.0),
+    ("hdrjax.merge.calibrate_illuminance",),
 )
 CASES["metrics.contrast_distortion"] = Case(
     # the rendition: x / (1 + |x|) as display values; NaN/Inf pixels are left out

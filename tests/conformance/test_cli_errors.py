@@ -32,6 +32,10 @@ ARGV = {
     "layers": ([], None),
     "lights": (["--json", "OUT.json", "--width", "64"], "OUT.json"),
     "measure": (["--at", "2,2"], None),
+    # merge/fuse read a bracket of images, not one EXR: their unwritable-folder and full-disk
+    # cases are in tests/merge/test_cli_merge.py
+    "merge": (["-o", "OUT.exr"], None),
+    "fuse": (["-o", "OUT.png"], None),
     "tonemap": (["-o", "OUT.png"], "OUT.png"),
     "vision": (["-o", "OUT.exr", "--scale", "100", "--effects", "none"], "OUT.exr"),
 }
@@ -127,6 +131,7 @@ UNKNOWN_METHOD = {
     "lights": (["--method", "nope"], "nope"),
     "vision": (["-o", "OUT.exr", "--scale", "100", "--effects", "nope"], "nope"),
     "falsecolor": (["-o", "OUT.png", "--cmap", "nope"], "nope"),
+    "merge": (["-o", "OUT.exr", "--weights", "nope"], "nope"),
 }
 
 # invalid parameter values (out of range or malformed)
@@ -142,6 +147,8 @@ INVALID_PARAMETER = {
     "fit": (["-o", "OUT.png", "--target", "mean=abc"], "mean"),
     "batch": (["-o", "OUTDIR", "--key", "-1"], "--key"),
     "compare": (["-o", "OUT.html", "--max-size", "0"], "--max-size"),
+    "merge": (["-o", "OUT.exr", "--samples", "0"], "--samples"),
+    "fuse": (["-o", "OUT.png", "--contrast", "-1"], "--contrast"),
 }
 
 

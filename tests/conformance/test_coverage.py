@@ -67,6 +67,27 @@ EXEMPT = {
     "hdrjax.lights.plot_lights": "matplotlib figure (tests/lights/test_detect.py)",
     # files: the fuzz test accepts only ReadError or a correct image for every reader
     # (tests/io/test_io_errors_fuzz.py); round trips in tests/conformance/test_properties.py
+    # exposure brackets: integer code values (N, H, W, 3) with exposure times, not linear
+    # images, so the image families do not apply; each function's own bad-input, finite-
+    # output, dtype and vmap tests are in tests/merge/
+    "hdrjax.merge.merge": "bracket merge (tests/merge/test_merge.py)",
+    "hdrjax.merge.recover_response": "response recovery (tests/merge/test_response.py)",
+    "hdrjax.merge.align_mtb": "bracket alignment (tests/merge/test_align.py)",
+    "hdrjax.merge.apply_shifts": "bracket alignment (tests/merge/test_align.py)",
+    "hdrjax.merge.ghost_mask": "bracket ghost mask (tests/merge/test_align.py)",
+    "hdrjax.merge.fuse": "exposure fusion of a bracket (tests/merge/test_fuse.py)",
+    "hdrjax.merge.as_codes": "bracket validation (tests/merge/test_simulate.py)",
+    "hdrjax.merge.Codes": "result container of as_codes (tests/merge/test_simulate.py)",
+    "hdrjax.merge.simulate_bracket": "bracket simulator (tests/merge/test_simulate.py)",
+    "hdrjax.merge.Bracket": "result container of simulate_bracket (test_simulate.py)",
+    "hdrjax.merge.true_response": "a camera curve's inverse (tests/merge/test_simulate.py)",
+    "hdrjax.merge.camera_curve": "camera curve lookup (tests/merge/test_simulate.py)",
+    "hdrjax.merge.weight_function": "per-code weight tables (tests/merge/test_merge.py)",
+    "hdrjax.merge.absolute_scale": "scalar camera formula (tests/merge/test_calibrate.py)",
+    "hdrjax.merge.read_bracket": "file reader (tests/merge/test_read.py)",
+    "hdrjax.merge.BracketFiles": "result container of read_bracket (tests/merge/test_read.py)",
+    "hdrjax.merge.load_response": "file reader (tests/merge/test_response.py)",
+    "hdrjax.merge.save_response": "file writer (tests/merge/test_response.py)",
     "hdrjax.io.read": "file reader (tests/io/test_io_errors_fuzz.py)",
     "hdrjax.io.write": "file writer (round trips: tests/conformance/test_properties.py)",
     "hdrjax.io.write_display": "file writer (tests/io/test_io_read_write.py)",

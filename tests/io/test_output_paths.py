@@ -29,12 +29,18 @@ CASES = {
     "compare": (["compare", "{P}", "-o", "{OUT}", "--methods", "linear"], "x.hdr"),
     "compare json": (["compare", "{P}", "-o", "r.html", "--json", "{OUT}"], "x.exr"),
     "compare reference": (["compare", "scene.exr", "--reference", "{P}", "-o", "{OUT}"], "x.png"),
+    "merge": (["merge", "{P}", "b.png", "-o", "{OUT}"], "x.png"),
+    "merge response": (
+        ["merge", "a.png", "b.png", "-o", "m.exr", "--response", "{P}", "--save-response", "{OUT}"],
+        "x.json",
+    ),
+    "fuse": (["fuse", "a.png", "{P}", "-o", "{OUT}"], "x.png"),
     # batch: the output folder holds the input frame under its output name
     "batch": (["batch", "{P}", "-o", "{OUT}", "--format", "exr", "--no-resume"], "frames/a.exr"),
     "batch folder": (["batch", "{P}", "-o", "{OUT}"], "x.exr"),  # -o names an input file
 }
 # options whose value is a file or folder a subcommand writes
-WRITING_DESTS = {"output", "json_path", "region_out", "legend"}
+WRITING_DESTS = {"output", "json_path", "region_out", "legend", "save_response"}
 
 
 def _writers() -> set[str]:
