@@ -237,7 +237,7 @@ def _align(codes, steps: _Steps) -> tuple:
     codes = hm.apply_shifts(codes, shifts)
     steps.done()
     text = ", ".join(f"({dx:+d}, {dy:+d})" for dx, dy in shifts.tolist())
-    return codes, f"aligned (Ward 2003 MTB): shifts (dx, dy) {text}"
+    return codes, f"aligned (Ward 2003 MTB): shifts (dx, dy) {text}", int(abs(shifts).max())
 
 
 def _response_choice(text: str | None, all_raw: bool) -> tuple[str | None, str | None]:
@@ -316,8 +316,9 @@ def run_merge(args: argparse.Namespace) -> int:
         calibration = _calibration(args, bracket) if args.calibrate else None
         codes, times = bracket.images, bracket.exposure_times
         levels = 256 if codes.dtype == np.uint8 else 65536
+        border = 0
         if args.align:
-            codes, text = _align(codes, steps)
+            codes, text, border = _align(codes, steps)
             lines.append(text)
         steps("response")
         if response_file is not None:
@@ -337,7 +338,11 @@ def run_merge(args: argparse.Namespace) -> int:
             g = _linear_response(levels)
             lines.append("response: linear (g(z) = ln(z / z_max))")
         else:
-            g = np.asarray(hm.recover_response(codes, times, method=method, samples=args.samples))
+            # the border the alignment uncovered repeats edge pixels, which are not what
+            # each exposure saw: the response is recovered from the inside
+            b = border if 0 < 2 * border < min(codes.shape[1:3]) else 0
+            inside = codes[:, b : codes.shape[1] - b, b : codes.shape[2] - b]
+            g = np.asarray(hm.recover_response(inside, times, method=method, samples=args.samples))
             lines.append(f"response: {method} (recovered from the bracket)")
         steps.done()
         if args.save_response:
@@ -403,7 +408,7 @@ def run_fuse(args: argparse.Namespace) -> int:
         lines = _describe(bracket)
         codes = bracket.images
         if args.align:
-            codes, text = _align(codes, steps)
+            codes, text, _ = _align(codes, steps)
             lines.append(text)
         steps("fusing")
         raw = [os.path.splitext(p)[1].lower() in hm.RAW_EXTENSIONS for p in bracket.paths]
