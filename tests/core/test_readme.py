@@ -247,3 +247,21 @@ def test_the_gallery_shows_every_operator():
     rows = -(-len(builtin) // cols)
     w, h = Image.open(REPO / "docs" / "gallery.jpg").size
     assert w == cols * 260 and h >= rows * 130, "the grid has one panel per operator"
+
+
+def test_merge_figures_are_the_committed_benchmark():
+    """The bracket section's speed ratios are those of benchmarks/results/merge/."""
+    import json
+
+    path = REPO / "benchmarks" / "results" / "merge" / "results-cpu.json"
+    recs = json.loads(path.read_text())["records"]
+    ours = {r["case"].split(" 5 x")[0]: r for r in recs if r.get("impl") == "hdrjax"}
+    text = _flat(README)
+    merge = ours["merge"]["extra"]
+    assert f"**{merge['ratio_vs_opencv']:.2f}×** OpenCV's `MergeDebevec`" in text
+    assert f"**{merge['ratio_vs_colour-hdri']:.3f}×** colour-hdri's" in text
+    assert f"**{ours['response debevec']['extra']['ratio_vs_opencv']:.2f}×** OpenCV's" in text
+    assert f"{ours['align MTB']['extra']['ratio_vs_opencv']:.2f}× OpenCV's `calculateShift`" in text
+    assert (
+        f"{ours['fuse Mertens']['extra']['ratio_vs_opencv']:.1f}× OpenCV's `MergeMertens`" in text
+    )
