@@ -378,7 +378,10 @@ def run_merge(args: argparse.Namespace) -> int:
         image = np.asarray(rgb, dtype=np.float32)
         steps.done()
         try:
-            hio.write(args.output, LayeredImage(image, quantity=quantity))
+            # calibrated: the pixels are cd/m², so OpenEXR's whiteLuminance (cd/m² of RGB
+            # (1, 1, 1)) is 1, which tools that know only the standard attribute read
+            white = 1.0 if quantity == "luminance" else None
+            hio.write(args.output, LayeredImage(image, quantity=quantity, white_luminance=white))
         except (ValueError, OSError) as e:
             raise DataError(f"{args.output}: cannot write: {e}") from None
     finally:

@@ -80,7 +80,10 @@ def test_merge_writes_the_librarys_radiance_and_calibrates(tmp_path, capsys):
     # downstream commands read cd/m² without --scale
     exr = tmp_path / "cal.exr"
     assert main(["merge", *paths, "-o", str(exr), "--response", str(resp), "--calibrate"]) == 0
-    np.testing.assert_array_equal(hio.read(exr).image, (expected * np.float32(scale)))
+    back = hio.read(exr)
+    np.testing.assert_array_equal(back.image, (expected * np.float32(scale)))
+    # OpenEXR's own attribute too: RGB (1, 1, 1) is 1 cd/m²
+    assert back.white_luminance == 1.0 and back.quantity == "luminance"
     capsys.readouterr()
     assert main(["falsecolor", str(exr), "-o", str(tmp_path / "fc.png")]) == 0
     assert "cd/m²" in capsys.readouterr().out
