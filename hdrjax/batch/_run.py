@@ -532,7 +532,8 @@ def run(
         scheduler: address of a running Dask scheduler (``"tcp://host:8786"``) or a
             ``distributed.Client``; workers need hdrjax installed and must see the input
             and output paths.
-        progress: show a progress bar (tqdm, frames/s) when stderr is a terminal.
+        progress: show a progress bar (tqdm, frames/s) when stderr is a terminal, and on Dask
+            the cluster's dashboard address (on stderr).
         resume: skip frames whose output file exists (outputs are written atomically, so an
             existing output is complete). ``False`` rewrites them.
         allow_nan: render frames with NaN pixels (black) instead of failing them.
@@ -616,6 +617,11 @@ def run(
             return _summary(skipped, col, t0)
         if dask:
             client, cluster, own_client = _client(workers, scheduler)
+            link = getattr(client, "dashboard_link", None)
+            if progress and link:  # where to watch the cluster work (bokeh, the [dask] extra)
+                from tqdm.auto import tqdm
+
+                tqdm.write(f"hdrjax batch: Dask dashboard: {link}", file=sys.stderr)
         values = None
         cache: dict[int, Any] = {}
         if sequence and todo:

@@ -72,7 +72,7 @@ def _bytes(folder):
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if not p.name.startswith(".")}
 
 
-def test_dask_outputs_equal_in_process(frames, reference, cluster, tmp_path):
+def test_dask_outputs_equal_in_process(frames, reference, cluster, tmp_path, capsys):
     _, client = cluster
     pipe = batch.Pipeline("reinhard2002")
     # chunks of 4 on two workers vs. the in-process batches: the same bytes
@@ -83,9 +83,17 @@ def test_dask_outputs_equal_in_process(frames, reference, cluster, tmp_path):
         parameters="same",
         batch_size=4,
         scheduler=client,
-        progress=False,
+        progress=True,
     )
     assert len(s.done) == N and not s.failed
+    # the dashboard's address is shown (bokeh comes with the [dask] extra): it answers
+    err = capsys.readouterr().err
+    link = client.dashboard_link
+    assert f"hdrjax batch: Dask dashboard: {link}" in err
+    import urllib.request
+
+    with urllib.request.urlopen(link, timeout=10) as page:
+        assert page.status == 200
     ref = _bytes(reference / "same")
     assert len(ref) == N
     assert _bytes(tmp_path / "same") == ref
