@@ -53,6 +53,7 @@ _ATTRIBUTES = {
     "make_operator": ".operators",
     "operator_names": ".operators",
     "tonemap": ".operators",
+    "show": "._show",
 }
 
 __all__ = sorted([*_SUBMODULES, *_ATTRIBUTES, "__version__"])
@@ -104,6 +105,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         luminance as luminance,
         luminance_weights as luminance_weights,
     )
+    from ._show import show as show
     from .display import (
         desaturate_highlights as desaturate_highlights,
         false_color as false_color,

@@ -511,6 +511,68 @@ class LayeredImage:
             white_luminance=None,
         )
 
+    def _layer_kinds(self) -> list[tuple[str, str]]:
+        out = []
+        for key in sorted(self.layers):
+            v = self.layers[key]
+            if isinstance(v, dict):
+                out.append((key, f"dict ({len(v)} keys)"))
+            else:
+                kind = "grid" if self.is_grid_layer(key) else "non-grid"
+                out.append((key, f"{kind} {v.dtype} {'×'.join(map(str, v.shape))}"))
+        return out
+
+    def _primaries(self) -> str:
+        if self.kind == "spectral":
+            return f"spectral ({len(self.channels)} bands, CIE 1931 XYZ)"
+        try:
+            return self.space.name if self.space.name != "file" else str(self.chromaticities)
+        except ValueError:
+            return str(self.chromaticities)
+
+    def __repr__(self) -> str:
+        unit = f" [{self.unit}]" if self.unit else ""
+        layers = ", ".join(k for k, _ in self._layer_kinds())
+        return (
+            f"LayeredImage({self.name!r}, {self.width}×{self.height}, "
+            f"channels {','.join(self.channels[:6])}{'…' if len(self.channels) > 6 else ''}, "
+            f"{self.quantity}{unit}, {self._primaries()}"
+            + (f", layers: {layers}" if layers else "")
+            + ")"
+        )
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: a tone-mapped thumbnail (Reinhard et al. 2002) and a table of
+        size, quantity and unit, primaries, projection and layers."""
+        import html
+
+        from .._show import display_image, png_data_uri
+
+        try:
+            thumb = f'<img src="{png_data_uri(display_image(self))}" style="max-width:256px">'
+        except (ValueError, TypeError) as e:  # an image with no RGB interpretation
+            thumb = f"<i>no thumbnail: {html.escape(str(e))}</i>"
+        rows = [
+            ("size", f"{self.width} × {self.height}"),
+            ("channels", ", ".join(self.channels)),
+            ("quantity", f"{self.quantity}" + (f" [{self.unit}]" if self.unit else "")),
+            ("primaries", self._primaries()),
+        ]
+        if self.projection:
+            rows.append(("projection", self.projection))
+        if self.white_luminance is not None:
+            rows.append(("white luminance", f"{self.white_luminance:g} cd/m²"))
+        rows += [(f"layer {k}", v) for k, v in self._layer_kinds()]
+        cells = "".join(
+            f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+            f"<td style='text-align:left'>{html.escape(v)}</td></tr>"
+            for k, v in rows
+        )
+        return (
+            f"<div><b>{html.escape(self.name)}</b><div style='display:flex;gap:1em'>"
+            f"{thumb}<table>{cells}</table></div></div>"
+        )
+
     def describe(self) -> str:
         """A short multi-line summary (size, channels, quantity, layers) for listings."""
         lines = [
