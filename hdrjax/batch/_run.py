@@ -43,6 +43,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._progress import progress_bar
 from .._stats import Statistics
 from ..io._atomic import remove_stale_temporaries
 from ..operators._time import has_time_course, time_dependent_names
@@ -137,15 +138,7 @@ def _entries(paths: list[str], out_dir: Path, ext: str) -> list[_Entry]:
 
 
 def _progress(total: int, enabled: bool, desc: str):
-    from tqdm.auto import tqdm
-
-    return tqdm(
-        total=total,
-        unit="frame",
-        desc=desc,
-        disable=not (enabled and sys.stderr.isatty()),
-        dynamic_ncols=True,
-    )
+    return progress_bar(total=total, unit="frame", desc=desc, enabled=enabled)
 
 
 def _reader(
@@ -532,7 +525,8 @@ def run(
         scheduler: address of a running Dask scheduler (``"tcp://host:8786"``) or a
             ``distributed.Client``; workers need hdrjax installed and must see the input
             and output paths.
-        progress: show a progress bar (tqdm, frames/s) when stderr is a terminal, and on Dask
+        progress: show a progress bar (tqdm, frames/s) on a terminal or in a Jupyter
+            notebook, and on Dask
             the cluster's dashboard address (on stderr).
         resume: skip frames whose output file exists (outputs are written atomically, so an
             existing output is complete). ``False`` rewrites them.

@@ -397,8 +397,8 @@ def read_bracket(
         need_times: ``False`` for uses that need no exposure times (exposure fusion): a
             file without one is then no error, its time is NaN and the bracket keeps the
             order of ``paths``.
-        progress: show a progress bar on standard error while reading (when it is a
-            terminal).
+        progress: show a progress bar while reading (on a terminal or in a Jupyter
+            notebook).
 
     Returns:
         :class:`BracketFiles`, sorted by exposure time (shortest first).
@@ -423,18 +423,11 @@ def read_bracket(
             )
         if not np.all(np.isfinite(times) & (times > 0)):
             raise ValueError(f"exposure_times: expected positive finite seconds, got {times}")
-    from tqdm.auto import tqdm
+    from .._progress import progress_bar
 
     images: list[np.ndarray] = []
     found: list[_Settings] = []
-    bar = tqdm(
-        files,
-        desc="reading",
-        unit="file",
-        disable=not (progress and sys.stderr.isatty()),
-        leave=False,
-        dynamic_ncols=True,
-    )
+    bar = progress_bar(files, desc="reading", unit="file", enabled=progress, leave=False)
     for p in bar:
         codes, settings = _read_exposure(p)
         if images:
