@@ -16,11 +16,15 @@ THUMBNAIL = 256
 """Longest side of a thumbnail (pixels)."""
 
 
+def _is_layered(x: Any) -> bool:
+    """A :class:`~hdrjax.layers.LayeredImage` (by its interface: this module is imported by
+    the layers package, so it does not import it)."""
+    return callable(getattr(x, "rgb", None)) and hasattr(x, "channels") and hasattr(x, "name")
+
+
 def _rgb(x: Any) -> np.ndarray:
     """Linear RGB ``(H, W, 3)`` float32 of an array or a LayeredImage."""
-    from .layers import LayeredImage
-
-    if isinstance(x, LayeredImage):
+    if _is_layered(x):
         return np.asarray(x.rgb(), np.float32)
     a = np.asarray(x)
     if a.ndim == 2:
@@ -91,15 +95,13 @@ def show(
     """
     from matplotlib.figure import Figure
 
-    from .layers import LayeredImage
-
     if not images:
         raise ValueError("images: expected at least one image")
     if titles is not None and len(titles) != len(images):
         raise ValueError(f"titles: expected {len(images)} titles, got {len(titles)}")
     shown = [display_image(x, method, size, **params) for x in images]
     if titles is None:
-        titles = [x.name if isinstance(x, LayeredImage) else "" for x in images]
+        titles = [x.name if _is_layered(x) else "" for x in images]
     n = len(shown)
     aspect = max(s.shape[0] / s.shape[1] for s in shown)
     fig = Figure(figsize=(width, width / n * aspect + 0.5), layout="constrained")
