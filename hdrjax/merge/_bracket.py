@@ -103,3 +103,36 @@ def reference_index(reference: Any, n: int) -> int:
     if not -n <= reference < n:
         raise ValueError(f"reference: expected an exposure index in [0, {n}), got {reference}")
     return int(reference) % n
+
+
+def check_response(response: Any, levels: int | None = None, *, name: str = "response") -> Any:
+    """Validate an inverse response ``g``: a ``(levels, 3)`` table of natural-log exposure per
+    code value, finite or ``−inf`` (codes no exposure produces), no NaN or ``+inf``, each
+    channel with at least one finite value; ``levels`` is checked when given (else ≥ 2).
+
+    Returns the table as float64 NumPy, or unchanged when it is a JAX tracer (only its shape
+    is checked then). Raises a one-line ``ValueError`` starting with ``name``.
+    """
+    import jax
+
+    want = f"({levels}, 3)" if levels is not None else "(levels, 3)"
+    what = f"{name}: expected a {want} table of ln exposure per code"
+    if isinstance(response, jax.core.Tracer):
+        shape = response.shape
+        if len(shape) != 2 or shape[1] != 3 or shape[0] != (levels or shape[0]):
+            raise ValueError(f"{what}, got shape {shape}")
+        return response
+    try:
+        g = np.array(response, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}, got {type(response).__name__}") from None
+    if levels is None and g.ndim == 2 and g.shape[0] >= 2:
+        levels = g.shape[0]  # any number of levels: name the one the table has
+        what = f"{name}: expected a ({levels}, 3) table of ln exposure per code"
+    if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] != levels:
+        raise ValueError(f"{what}, got shape {g.shape}")
+    if np.isnan(g).any() or np.isposinf(g).any() or not np.isfinite(g).any(axis=0).all():
+        raise ValueError(
+            f"{what} (finite, or -inf at dark codes), got NaN, +inf or a channel without values"
+        )
+    return g

@@ -39,7 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool
 
-from ._bracket import as_codes, reference_index
+from ._bracket import as_codes, check_response, reference_index
 
 
 @jax.jit
@@ -102,16 +102,7 @@ def ghost_mask(
     c = as_codes(images, exposure_times)
     n = c.codes.shape[0]
     ref = reference_index(reference, n)
-    try:
-        g = np.array(response, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"response: expected a ({c.levels}, 3) table of ln exposure, got {type(response)}"
-        ) from None
-    if g.shape != (c.levels, 3):
-        raise ValueError(f"response: expected shape ({c.levels}, 3), got {g.shape}")
-    if np.isnan(g).any() or np.isposinf(g).any() or not np.isfinite(g).any(axis=0).all():
-        raise ValueError("response: expected ln exposure values (finite, or -inf at dark codes)")
+    g = check_response(response, c.levels)
     finite = np.isfinite(g)
     floor = np.where(finite, g, np.inf).min(axis=0) - 10.0
     g = np.maximum.accumulate(np.where(finite, g, floor), axis=0)

@@ -50,7 +50,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, Integer
 
-from ._bracket import as_codes
+from ._bracket import as_codes, check_response
 from ._weights import (
     FULL_WELL_ELECTRONS,
     PER_CODE,
@@ -221,18 +221,6 @@ def _response_table(response: Any, images: Any, times: Any, levels: int) -> np.n
     return response
 
 
-def _check_response(g: Any, levels: int) -> Any:
-    shape = np.shape(g)
-    if shape != (levels, 3):
-        raise ValueError(f"response: expected a ({levels}, 3) table for these codes, got {shape}")
-    if isinstance(g, jax.core.Tracer):
-        return g
-    arr = np.asarray(g, np.float64)
-    if np.isnan(arr).any() or np.isposinf(arr).any():
-        raise ValueError("response: expected log exposures without NaN or +inf")
-    return g
-
-
 def _weight_table(weights: Any, levels: int) -> tuple[Any, bool]:
     """(table, granados?) for the ``weights`` argument."""
     if isinstance(weights, str):
@@ -295,7 +283,7 @@ def merge(
     table, granados = _weight_table(weights, levels)
     if not granados and (gain is not None or read_noise is not None):
         raise ValueError("gain: only weights='granados2010' uses gain and read_noise")
-    g = _check_response(_response_table(response, codes, times, levels), levels)
+    g = check_response(_response_table(response, codes, times, levels), levels)
     if mask is not None:
         m = np.asarray(mask)
         if m.shape != codes.shape[:3] or m.dtype != np.bool_:

@@ -89,7 +89,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..io import atomic_path
-from ._bracket import as_codes
+from ._bracket import as_codes, check_response
 
 METHODS = ("debevec", "robertson", "mitsunaga1999")
 """Response recovery methods by paper name."""
@@ -536,16 +536,6 @@ def recover_response(
 _CHANNEL_NAMES = ("IR", "IG", "IB")
 
 
-def _as_response(response: Any, name: str = "response") -> np.ndarray:
-    g = np.asarray(response, dtype=np.float64)
-    if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] < 2 or np.isnan(g).any():
-        raise ValueError(
-            f"{name}: expected a (levels, 3) table of log exposures without NaN, got shape "
-            f"{g.shape}"
-        )
-    return g
-
-
 def save_response(path: str | os.PathLike, response: ArrayLike, format: str | None = None) -> Path:
     """Write a response ``(levels, 3)`` (``ln X`` per code value) to ``path``, atomically.
 
@@ -562,7 +552,7 @@ def save_response(path: str | os.PathLike, response: ArrayLike, format: str | No
 
     Returns the path written. Raises a one-line ``ValueError`` for a bad response or format.
     """
-    g = _as_response(response)
+    g = check_response(response)
     p = Path(path)
     fmt = format or ("json" if p.suffix.lower() == ".json" else "pfs")
     if fmt not in ("pfs", "json"):
@@ -677,7 +667,7 @@ def load_response(path: str | os.PathLike) -> Float[Array, "levels 3"]:
             g = np.asarray(
                 [[-np.inf if v is None else v for v in ch] for ch in body["g"]], np.float64
             ).T
-            g = _as_response(g, str(p))
+            g = check_response(g, name=str(p))
             if g.shape[0] != body.get("levels"):
                 raise ValueError(f"{p}: 'levels' does not match the table")
         else:

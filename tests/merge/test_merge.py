@@ -285,3 +285,28 @@ def test_kernel_gradients_match_finite_differences():
         step = jnp.zeros_like(g).at[128, 1].set(h)
         fd = (total(g + step, log_t) - total(g - step, log_t)) / (2 * h)
         assert float(dg[128, 1]) == pytest.approx(float(fd), rel=1e-5)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [np.zeros((100, 3)), np.full((256, 3), np.nan), np.full((256, 3), np.inf),
+     np.full((256, 3), -np.inf), np.zeros((256, 2))],
+    ids=["levels", "nan", "+inf", "no-finite", "channels"],
+)
+def test_one_response_check_for_merge_ghosts_and_saving(bad, tmp_path):
+    """merge, ghost_mask and save_response reject a bad response table with the same
+    one-line message (one checker)."""
+    b = bracket("cornell_box.exr", "srgb")
+    messages = []
+    calls = [
+        lambda: hm.merge(b.codes, b.exposure_times, bad),
+        lambda: hm.ghost_mask(b.codes, b.exposure_times, bad),
+    ]
+    if len(bad) == 256:  # save_response takes any number of levels
+        calls.append(lambda: hm.save_response(tmp_path / "r.json", bad))
+    for call in calls:
+        with pytest.raises(ValueError, match="^response: expected a \\(") as info:
+            call()
+        messages.append(str(info.value))
+    assert len(set(messages)) == 1, messages
+    assert not (tmp_path / "r.json").exists()
