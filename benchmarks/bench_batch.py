@@ -19,7 +19,7 @@ Every implementation reads the files, tone-maps, encodes and writes every frame:
   rows, run-length matching).
 
 A second case repeats hdrjax, the loop and the peer at PNG zlib level 6
-(``Pipeline(compression=6)`` / ``--compression 6``), where the encoder is most of a frame's
+(``Pipeline(compression=6)`` / ``--zlib-level 6``), where the encoder is most of a frame's
 CPU time. ``cpu_ms_per_frame`` is the process CPU time per frame (all threads): on
 this 2-core machine no schedule can make a run shorter than half its CPU time, which bounds
 what overlapping I/O with compute can gain over the one-at-a-time loop.

@@ -1,8 +1,8 @@
 """Filters and highlight desaturation: hdrjax against OpenCV and SciPy, in one process.
 
 Single-channel float32 with edges replicated (OpenCV ``BORDER_REPLICATE`` and
-``medianBlur``'s own replication, SciPy ``mode="nearest"``); one RGB case, the seed's median
-(5×5 at 1366×768, pixels ranked by luminance, :func:`bench_seed_median`), has no peer.
+``medianBlur``'s own replication, SciPy ``mode="nearest"``); one RGB case, Birukov et al.
+2022's median (5×5 at 1366×768, pixels ranked by luminance, :func:`bench_seed_median`), has no peer.
 Each time is the median of the repeats after a warm-up call (the fastest is kept as
 ``min_s``); the warm-up's extra time over the median is reported as compile time. Every
 hdrjax result is checked against the peer (or a reference) before it is timed (medians
@@ -128,10 +128,10 @@ def bench_size(h: int, w: int, runs: int, rng, quick: bool = False) -> list[dict
 
 
 def bench_seed_median(runs: int, rng, h: int = 768, w: int = 1366) -> list[dict]:
-    """The seed's median: 5×5 on RGB, each window's pixel of median luminance
-    (``criterion="luminance"``), at the seed's 1366×768, beside the single-plane 5×5 median
+    """Birukov et al. 2022's median: 5×5 on RGB, each window's pixel of median luminance
+    (``criterion="luminance"``), at their 1366×768, beside the single-plane 5×5 median
     of the same size timed in the same process (``plane_median_s``, ``plane_min_s``): the
-    seed stated ≈ 1 s for this filter, which the single-plane figure alone would flatter.
+    paper stated ≈ 1 s for this filter, which the single-plane figure alone would flatter.
 
     Checked first: the luminance of every output pixel is the median of its window's
     luminances (the single-plane median of the luminance image)."""

@@ -1,4 +1,4 @@
-"""Benchmark: hdrjax.lights.detect against seed 001's own listing, and its accuracy/time curve.
+"""Benchmark: hdrjax.lights.detect against Loghin 2019's own listing, and its accuracy/time curve.
 
 Run: ``.venv/bin/python benchmarks/bench_lights.py [--quick]``
 
@@ -8,15 +8,16 @@ medians over repeats after a warm-up; hdrjax's compile time (first call minus th
 reported separately and never mixed into the ratios. Quick mode: the bundled map only, 5
 repeats, three points of the accuracy/time curve, median cut with 16 lights, no batch.
 
-Records: ``detect defaults <map>`` (hdrjax with a JAX and a NumPy input against the seed
+Records: ``detect defaults <map>`` (hdrjax with a JAX and a NumPy input against Loghin's
 listing, with the quality figures below as extras), ``detect batch of N maps``, ``median_cut
 <map> n=<lights>``, and the accuracy/time curve ``lights.detect (width, samples/px, blur)``:
 error = mean angular error (degrees) of the found significant blobs over the maps, time =
 median over the maps of each map's median time.
 
-**The peer** is the seed's listing (``../shared/seeds/001_*.txt``) made runnable with the
-fewest changes, in :class:`SeedListing`: OpenCV bilinear resize to width 1024 and a
-σ = 1 px Gaussian blur (the seed's "1–2 px"), the listing's loops as written. What the
+**The peer** is the Python listing of D.-A. Loghin, "Detection of light sources from
+environment maps", 2019 (http://alinloghin.com/articles/env_lights.html), made runnable with
+the fewest changes, in :class:`SeedListing`: OpenCV bilinear resize to width 1024 and a
+σ = 1 px Gaussian blur (the article's "1–2 px"), the listing's loops as written. What the
 listing leaves out or gets wrong, and what was done (each marked ``# fix:`` in the code):
 
 - ``computeNeighborLuminance``, ``distance2d`` and ``euclideanThresholdPixel`` are not
@@ -29,12 +30,12 @@ listing leaves out or gets wrong, and what was done (each marked ``# fix:`` in t
 - ``bresenhamCheck`` is called with 7 arguments but defined with 6 (``imageSize``): the
   definition takes ``width, height``; ``localIndices`` holds floats, used as int indices.
 
-**Quality** is measured against the bright blobs of ``SOURCES.md`` recomputed here with its
-definition (pixels with ``Y > T``, ``T = max(50·median(Y), 0.02·max(Y))``, 8-connected, seam
-merged; :func:`quality` has the details): a light is *spurious* when no blob pixel is within
-1° (plus the light's own angular radius); a blob with ≥ 1 % of the cos-weighted energy is
-*missed* when no light is that close; the angular error is measured from the blob's energy
-centroid to the (energy-weighted) mean direction of the lights covering it.
+**Quality** is measured against the maps' bright blobs, by hdrjax's own definition (pixels with
+``Y > T``, ``T = max(50·median(Y), 0.02·max(Y))``, 8-connected, seam merged; :func:`quality` has
+the details): a light is *spurious* when no blob pixel is within 1° (plus the light's own
+angular radius); a blob with ≥ 1 % of the cos-weighted energy is *missed* when no light is that
+close; the angular error is measured from the blob's energy centroid to the (energy-weighted)
+mean direction of the lights covering it.
 """
 
 import argparse
@@ -72,7 +73,7 @@ CURVE = "lights.detect (width, samples/px, blur)"
 
 
 class SeedListing:
-    """Seed 001's listing, runnable: see the module docstring for every change (``# fix:``)."""
+    """Loghin 2019's listing, runnable: see the module docstring for every change (``# fix:``)."""
 
     samplesMultiplier = 0.006
     luminanceThreshold = 0.8
@@ -256,13 +257,14 @@ class SeedListing:
 
 
 def unit_vectors(az_deg: np.ndarray, el_deg: np.ndarray) -> np.ndarray:
-    """hdrjax directions (Y-up, ahead −Z) of SOURCES.md azimuths/elevations in degrees."""
+    """hdrjax directions (Y-up, ahead −Z) of azimuths/elevations in degrees (0° at the image
+    centre, azimuth positive to the right)."""
     az, el = np.radians(az_deg), np.radians(el_deg)
     return np.stack([np.cos(el) * np.sin(az), np.sin(el) + 0 * az, -np.cos(el) * np.cos(az)], -1)
 
 
 def blobs(rgb: np.ndarray) -> list[dict]:
-    """SOURCES.md's bright blobs: Y > max(50 median, 0.02 max), 8-connected, seam merged."""
+    """The bright blobs: Y > max(50 median, 0.02 max), 8-connected, seam merged."""
     h, w = rgb.shape[:2]
     Y = rgb @ np.array([0.2126, 0.7152, 0.0722], np.float64)
     Y = np.where(np.isfinite(Y), Y, 0.0)
@@ -386,7 +388,7 @@ def run(quick: bool = False) -> list[dict]:
     print(f"[lights] jax {jax.__version__}, {jax.devices()[0].platform}, maps: {len(maps)}")
     out: list[dict] = []
 
-    # ---- 1. hdrjax defaults vs the seed listing, same process, same maps
+    # ---- 1. hdrjax defaults vs Loghin's listing, same process, same maps
     peer = SeedListing()
     for name, rgb, jrgb, truth in maps:
         case = f"detect defaults {name}"

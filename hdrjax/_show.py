@@ -6,11 +6,11 @@ Numeric contract: HDR images are linear RGB ``(H, W, 3)`` (or ``(H, W)`` luminan
 shown as they are.
 """
 
-import base64
-import io
 from typing import Any
 
 import numpy as np
+
+from ._repr import png_data_uri as png_data_uri
 
 THUMBNAIL = 256
 """Longest side of a thumbnail (pixels)."""
@@ -60,15 +60,6 @@ def display_image(x: Any, method: str = "reinhard2002", size: int | None = THUMB
     small = np.where(np.isfinite(small), small, 0.0).astype(np.float32)
     out = operators.tonemap(small, method, **params)
     return np.asarray(display.quantize(display.encode(out), 8))
-
-
-def png_data_uri(rgb8: np.ndarray) -> str:
-    """A ``data:image/png;base64,…`` URI of an 8-bit RGB array."""
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(rgb8)).save(buf, format="PNG")
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
 def show(

@@ -137,6 +137,29 @@ class LuminanceStats(eqx.Module):
         mx = jnp.where(self.n_positive > 0, self.max, 1.0)
         return jnp.where(self.n_positive > 0, jnp.log2(mx) - jnp.log2(self.min_positive), 0.0)
 
+    def _rows(self) -> list[tuple[str, Any]]:
+        from . import _repr
+
+        rows = _repr.fields(self)
+        if _repr.concrete(self.max):
+            rows.append(("dynamic_range", self.dynamic_range_stops))
+        return rows
+
+    def __repr__(self) -> str:
+        """The statistics as numbers (luminance in the image's units), with the dynamic
+        range in stops."""
+        from . import _repr
+
+        return _repr.call(self, self._rows(), units={"dynamic_range": "stops"})
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: a table of the statistics."""
+        from . import _repr
+
+        unit = {"dynamic_range": "stops"}
+        rows = [(k, _repr.value(v, unit.get(k, ""))) for k, v in self._rows()]
+        return _repr.view("LuminanceStats (luminance in the image's units)", _repr.table(rows))
+
 
 BLOCK = 1 << 18
 """Elements per block of the blocked passes (1 MiB of float32)."""
@@ -718,6 +741,19 @@ class Statistics(eqx.Module):
     source: Array | None = None
     delta: float = eqx.field(static=True, default=DEFAULT_DELTA)
     m: int | None = eqx.field(static=True, default=None)
+
+    def __repr__(self) -> str:
+        """The counts, extrema and sums as numbers, the histogram and source summarised."""
+        from . import _repr
+
+        return _repr.call(self)
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: a table of the fields."""
+        from . import _repr
+
+        rows = [(k, _repr.value(v)) for k, v in _repr.fields(self)]
+        return _repr.view("Statistics (luminance in the image's units)", _repr.table(rows))
 
     def merge(self, other: "Statistics") -> "Statistics":
         """The statistics of both parts together (exact: counts, extrema and histogram;

@@ -9,7 +9,7 @@ is treated as lying on the flat (absolute-threshold) branch.
 Reference: J. A. Ferwerda, S. N. Pattanaik, P. Shirley, D. P. Greenberg, "A model of visual
 adaptation for realistic image synthesis", SIGGRAPH 1996, pp. 249–258,
 doi:10.1145/237170.237262. Transcribed from banterle/HDR_Toolbox ``TpFerwerda.m`` /
-``TsFerwerda.m`` and NREL/Radiance ``pcond3.c`` (``htcontrs``); see formulas.md §3.2.
+``TsFerwerda.m`` and NREL/Radiance ``pcond3.c`` (``htcontrs``).
 """
 
 import jax.numpy as jnp

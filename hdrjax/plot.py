@@ -3,6 +3,8 @@
 :func:`tone_curve` shows how an operator maps an image's world luminance to display
 luminance, over the histogram of that image's luminance, so one sees where the pixels fall
 on the curve. Sweeps are plotted by :func:`hdrjax.study.plot_sweep`.
+:func:`angular_grid` draws a panorama's or view's azimuth/elevation grid onto an Axes,
+:func:`with_angular_grid` over a display image.
 """
 
 from typing import Any
@@ -11,6 +13,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
+from ._angular_grid import (
+    angular_grid as angular_grid,
+    with_angular_grid as with_angular_grid,
+)
 from .operators import make_operator
 from .operators._base import AbstractLuminanceCurve, AbstractOperator, as_float_image
 
@@ -128,4 +134,4 @@ def tone_curve(
     return ax
 
 
-__all__ = ["tone_curve"]
+__all__ = ["angular_grid", "tone_curve", "with_angular_grid"]

@@ -38,8 +38,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ._progress import compiled_progress, tick, wait_ready
 from .fit import downscale
-from .operators import make_operator
+from .operators import make_operator, parameter_info
 from .operators._base import AbstractOperator, as_float_image
 from .targets import AbstractTarget, ClippedFraction, MeanLuminance, Percentiles
 
@@ -129,6 +130,66 @@ class SweepResult(eqx.Module):
             stat_names=self.stat_names,
         )
 
+    def _ranges(self) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+        """Text of each swept parameter's values and of each statistic's range over the
+        grid (with the least-loss point when there is a loss)."""
+        from . import _repr
+
+        units = {i.name: _repr.short_unit(i.unit) for i in parameter_info(self.operator)}
+        swept = [
+            (
+                n,
+                f"{a.shape[0]} values, {_repr.value(np.min(a))} to {_repr.value(np.max(a))}"
+                + (f" {units[n]}" if units.get(n) else ""),
+            )
+            for n, a in self.grid.items()
+        ]
+        names = list(self.stat_names) + (["loss"] if self.loss is not None else [])
+        stats = []
+        for n in names:
+            s = np.asarray(self.stat(n))
+            ok = s[np.isfinite(s)]
+            text = f"{_repr.value(ok.min())} to {_repr.value(ok.max())}" if ok.size else "NaN"
+            stats.append((n, text))
+        if self.loss is not None and np.isfinite(np.asarray(self.loss)).any():
+            best = ", ".join(f"{k}={_repr.value(v)}" for k, v in self.argmin().items())
+            stats.append(("least loss at", best))
+        return swept, stats
+
+    def __repr__(self) -> str:
+        """``SweepResult(reinhard2002 over key: 8 values, 0.05 to 0.5; mean 0.1 to 0.4, …)``."""
+        from . import _repr
+
+        if not _repr.concrete(self.statistics):
+            return f"SweepResult({self.operator.name} over {', '.join(self.params)}; traced)"
+        swept, stats = self._ranges()
+        over = "; ".join(f"{n}: {t}" for n, t in swept)
+        return (
+            f"SweepResult({self.operator.name} over {over}; "
+            + ", ".join(f"{n} {t}" for n, t in stats)
+            + ")"
+        )
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the swept values, each statistic's range over the grid (and
+        the least-loss point), and for a 1-D grid of at most 16 points every value."""
+        from . import _repr
+
+        if not _repr.concrete(self.statistics):
+            return _repr.preformatted(repr(self))
+        swept, stats = self._ranges()
+        body = _repr.table(swept, ("swept", "values")) + _repr.table(stats, ("statistic", "range"))
+        if len(self.params) == 1 and self.shape[0] <= 16:
+            names = list(self.stat_names) + (["loss"] if self.loss is not None else [])
+            cols = [np.asarray(self.stat(n)) for n in names]
+            rows = [
+                [_repr.value(a)] + [_repr.value(c[i]) for c in cols]
+                for i, a in enumerate(np.asarray(self.axes[0]))
+            ]
+            body += _repr.table(rows, [self.params[0], *names])
+        title = f"SweepResult: {type(self.operator).__name__} ({self.operator.name})"
+        return _repr.view(title, body, note=f"operator: {self.operator!r}")
+
 
 def _with(op: AbstractOperator, names: tuple[str, ...], values: Sequence[Array]):
     return eqx.tree_at(
@@ -140,11 +201,13 @@ def _with(op: AbstractOperator, names: tuple[str, ...], values: Sequence[Array])
 
 
 @eqx.filter_jit
-def _sweep_jit(op, image, names, flat, target, max_size, batch_size):
+def _sweep_jit(op, image, names, flat, target, max_size, batch_size, ticks=False):
     small = downscale(image, max_size)
     stats = _default_statistics()
 
     def one(values):
+        if ticks:  # once per grid point (vmap and lax.map call it per element)
+            tick(values[0])
         o = _with(op, names, values).measure(image)
         out = o(small)
         s = stats.statistics(out)
@@ -194,8 +257,14 @@ def sweep(
     *,
     max_size: int | None = 64,
     batch_size: int | None = None,
+    progress: bool = True,
 ) -> SweepResult:
     """Evaluate ``operator`` at every point of ``grid`` and measure the display statistics.
+
+    Where a person watches (a terminal or a Jupyter notebook; never in a pipe, a log or
+    inside an enclosing ``jit``) and ``progress`` is true, a bar counts the grid points
+    evaluated, for sweeps that last over a second (with ``batch_size``, it advances batch
+    by batch); the call then returns when the sweep is done.
 
     Args:
         operator: an operator instance (parameters not in ``grid`` keep their values; ``None``
@@ -244,15 +313,21 @@ def sweep(
     axes = tuple(jnp.asarray(values[n], dtype) for n in names)
     mesh = jnp.meshgrid(*axes, indexing="ij")
     flat = tuple(m.reshape(-1) for m in mesh)
-    stats, loss = _sweep_jit(
-        op,
-        image,
-        names,
-        flat,
-        target,
-        None if max_size is None else int(max_size),
-        None if batch_size is None else int(batch_size),
-    )
+    show = progress and not isinstance(image, jax.core.Tracer)
+    points = int(flat[0].shape[0])
+    with compiled_progress(show, total=points, unit="point", desc=f"sweep {op.name}") as ticks:
+        stats, loss = _sweep_jit(
+            op,
+            image,
+            names,
+            flat,
+            target,
+            None if max_size is None else int(max_size),
+            None if batch_size is None else int(batch_size),
+            ticks,
+        )
+        if ticks:
+            wait_ready((stats, loss))
     shape = tuple(a.shape[0] for a in axes)
     return SweepResult(
         axes=axes,

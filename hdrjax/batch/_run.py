@@ -124,7 +124,8 @@ def expand_paths(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list
 
 
 def _entries(paths: list[str], out_dir: Path, ext: str) -> list[_Entry]:
-    entries, seen = [], {}
+    entries: list[_Entry] = []
+    seen: dict[Path, str] = {}
     for i, p in enumerate(paths):
         out = output_path(p, out_dir, ext)
         if out in seen:

@@ -5,7 +5,10 @@ Subcommands live in ``hdrjax/cli/_cmd_<name>.py``; each module defines
 namespace and returning an exit code). A module imports what ``func`` needs inside it, so
 building the parsers imports no JAX (what they show of the operators comes from
 :mod:`._registry`). Errors are one line naming the file or argument and the problem: exit
-code 2 for usage errors, 1 for bad data.
+code 2 for usage errors, 1 for bad data; Ctrl-C ends a command at once with exit code 130
+and one line. A command replaces an existing output file (atomically: a finished temporary
+file is renamed onto it) but never a file it reads; ``--no-clobber`` refuses an existing
+output (exit code 2).
 
 Before parsing, the modules listed in the environment variable ``HDRJAX_PLUGINS``
 (comma-separated module names or ``.py`` file paths) are imported, so the operators they
@@ -18,7 +21,14 @@ import importlib
 import os
 import sys
 
-from ._common import CLIError, DataError, UsageError
+from ._common import (
+    WRITING_DESTS,
+    CLIError,
+    DataError,
+    UsageError,
+    add_no_clobber_argument,
+    refuse_clobbering,
+)
 
 __all__ = ["CLIError", "DataError", "UsageError", "build_parser", "load_plugins", "main"]
 
@@ -49,7 +59,23 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers.required = True
     for name in _command_modules():
         importlib.import_module(f"{__name__}.{name}").register(subparsers)
+    for sub in subparsers.choices.values():
+        _add_overwrite_policy(sub)
     return parser
+
+
+def _add_overwrite_policy(sub: argparse.ArgumentParser) -> None:
+    """One overwrite policy for every command that writes files: an existing output is
+    replaced (atomically: :func:`hdrjax.io.atomic_path`), never an input, and
+    ``--no-clobber`` refuses an existing output (checked by :func:`_run` before the command
+    starts). ``batch``, whose output is a folder of frames, keeps its own (existing frames
+    are skipped, ``--no-resume`` replaces them): a command states that with
+    ``set_defaults(overwrite_policy="resume")``."""
+    options = {o for a in sub._actions for o in a.option_strings}
+    if sub.get_default("overwrite_policy") == "resume" or "--no-clobber" in options:
+        return
+    if any(a.dest in WRITING_DESTS for a in sub._actions):
+        add_no_clobber_argument(sub)
 
 
 def _command_modules() -> list[str]:
@@ -140,17 +166,41 @@ def main(argv: list[str] | None = None) -> int:
         # the image goes to standard output: everything printed goes to standard error
         args.stdout = sys.stdout.buffer
         with contextlib.redirect_stdout(sys.stderr):
-            return _run(args)
-    return _run(args)
+            code = _run(args)
+    else:
+        code = _run(args)
+    cluster = getattr(args, "workers", None) or getattr(args, "scheduler", None)
+    if code == 130 and argv is None and not cluster:
+        _leave_now(code)
+    return code
+
+
+def _leave_now(code: int) -> None:
+    """Ctrl-C on the command line: leave at once. The interpreter's normal exit waits for
+    the compiled computations still running (a tile, a whole image: seconds), so the
+    process ends here, standard streams flushed; the interrupted command has already
+    removed its temporary files (:func:`hdrjax.io.atomic_path` on the way out). Not for a
+    Dask cluster, whose workers are shut down by the normal exit, nor in-process calls
+    (``main([...])``)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(code)
 
 
 def _run(args: argparse.Namespace) -> int:
     try:
+        refuse_clobbering(args)
         return int(args.func(args) or 0)
     except CLIError as e:
         print(f"hdrjax {args.command}: error: {e}", file=sys.stderr)
         return e.exit_code
     except KeyboardInterrupt:
+        # Ctrl-C: one line (on a new one where a progress bar was drawn), status 128 + SIGINT;
+        # outputs are written by renaming a finished temporary file, so none is left half
+        with contextlib.suppress(OSError, ValueError):
+            newline = "\n" if sys.stderr.isatty() else ""
+            print(f"{newline}hdrjax {args.command}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         # the reader went away (``hdrjax info x.exr | head``): stop quietly, and point

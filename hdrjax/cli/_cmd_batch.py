@@ -17,19 +17,14 @@ from ._cmd_tonemap import (
 )
 from ._common import (
     DataError,
+    DeprecatedAlias,
     UsageError,
+    odd_size,
     positive_float,
     positive_int,
     refuse_overwriting_inputs,
 )
 from ._registry import constant
-
-
-def _odd_size(text: str) -> int:
-    v = positive_int(text)
-    if v % 2 == 0:
-        raise argparse.ArgumentTypeError(f"expected an odd window size, got {text!r}")
-    return v
 
 
 def register(subparsers) -> None:
@@ -101,12 +96,20 @@ def register(subparsers) -> None:
         "--bits", type=int, choices=(8, 16), help="PNG/TIFF bit depth (8; 16 for PQ/HLG)"
     )
     p.add_argument(
-        "--compression",
+        "--zlib-level",
         type=int,
         choices=range(10),
         default=constant("hdrjax.io.DEFAULT_COMPRESSION"),
         metavar="0-9",
         help="PNG/TIFF zlib level (default 1, OpenCV's; 6 is ~8x slower for ~1%% smaller PNGs)",
+    )
+    p.add_argument(
+        "--compression",
+        dest="zlib_level",
+        type=int,
+        choices=range(10),
+        action=DeprecatedAlias,
+        replacement="use --zlib-level (--compression names the EXR compression in `hdrjax export`)",
     )
     p.add_argument(
         "--transfer", choices=("srgb", "gamma", "linear"), default="srgb", help="display encoding"
@@ -127,8 +130,8 @@ def register(subparsers) -> None:
         "--scale", type=positive_float, default=1.0, help="multiply every frame by this first"
     )
     add_colour_arguments(p)
-    p.add_argument("--median", type=_odd_size, metavar="K", help="median filter K×K first")
-    p.add_argument("--mean", type=_odd_size, metavar="K", help="mean filter K×K first")
+    p.add_argument("--median", type=odd_size, metavar="K", help="median filter K×K first")
+    p.add_argument("--mean", type=odd_size, metavar="K", help="mean filter K×K first")
     p.add_argument(
         "--desaturate", action="store_true", help="desaturate highlights (automatic threshold)"
     )
@@ -152,7 +155,8 @@ def register(subparsers) -> None:
         "--allow-nan", action="store_true", help="render NaN pixels black instead of failing"
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=run, table=None)
+    # existing frames are skipped (resume) or replaced (--no-resume): no --no-clobber
+    p.set_defaults(func=run, table=None, overwrite_policy="resume")
 
 
 def build_pipeline(args: argparse.Namespace):
@@ -182,7 +186,7 @@ def build_pipeline(args: argparse.Namespace):
             steps=tuple(steps),
             format=args.format,
             bits=args.bits,
-            compression=args.compression,
+            compression=args.zlib_level,
             transfer=args.transfer,
             gamma=args.gamma,
             display=args.display,

@@ -1,13 +1,20 @@
 """``hdrjax compare INPUT -o report.html``: several operators side by side, scored.
 
 Runs :func:`hdrjax.report.compare` and writes its table as one self-contained HTML page
-(and, with ``--json``, the numbers).
+(and, with ``--json-out``, the numbers).
 """
 
 import argparse
 import os
 
-from ._common import DataError, UsageError, positive_float, read_image, refuse_overwriting_inputs
+from ._common import (
+    DataError,
+    DeprecatedAlias,
+    UsageError,
+    positive_float,
+    read_image,
+    refuse_overwriting_inputs,
+)
 from ._registry import find
 
 HTML_EXT = (".html", ".htm")
@@ -28,7 +35,15 @@ def register(subparsers) -> None:
     )
     p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
     p.add_argument("-o", "--output", required=True, help="the report: an .html file")
-    p.add_argument("--json", dest="json_path", help="also write the table's numbers as JSON")
+    p.add_argument(
+        "--json-out",
+        dest="json_path",
+        metavar="FILE.json",
+        help="also write the table's numbers as JSON",
+    )
+    p.add_argument(
+        "--json", dest="json_path", action=DeprecatedAlias, replacement="use --json-out FILE.json"
+    )
     p.add_argument(
         "--sheet",
         metavar="FILE",
@@ -94,7 +109,7 @@ def _check_paths(args: argparse.Namespace) -> None:
         raise UsageError(f"{args.sheet}: expected a .png file for --sheet")
     named = [os.path.abspath(p) for p in outputs if p is not None]
     if len(set(named)) < len(named):
-        raise UsageError("-o, --json and --sheet must name different files")
+        raise UsageError("-o, --json-out and --sheet must name different files")
     for path in outputs:
         if path is None:
             continue

@@ -4,7 +4,9 @@ import argparse
 import os
 
 from ._common import (
+    CLIError,
     DataError,
+    DeprecatedAlias,
     UsageError,
     add_format_argument,
     output_ext,
@@ -16,12 +18,13 @@ HDR_EXT = (".exr", ".hdr", ".pic", ".pfm")
 LDR_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 
 
-def as_data_error(e: Exception, *paths: str) -> DataError:
+def as_data_error(e: Exception, *paths: str) -> CLIError:
     """A one-line DataError for an io/measure failure, naming the file (shared by the
-    layers, measure and export commands)."""
+    layers, measure and export commands); an output that appeared after the ``--no-clobber``
+    check is refused as that check refuses it (UsageError)."""
     if isinstance(e, FileExistsError):
         name = str(e).split(": already exists")[0]
-        return DataError(f"{name}: already exists (use --overwrite)")
+        return UsageError(f"{name}: already exists (--no-clobber)")
     msg = str(e)
     named = any(os.path.basename(p) in msg for p in paths)
     return DataError(msg if named else f"{paths[0]}: {msg}")
@@ -35,8 +38,8 @@ def register(subparsers) -> None:
         description="Format conversion. HDR outputs keep the values (EXR keeps every layer; "
         "Radiance and PFM drop layers unless --sidecars writes them next to the output). "
         "LDR outputs are the linear image times 2^EXPOSURE, clipped and sRGB-encoded (use "
-        "`hdrjax tonemap` for tone mapping). Existing files are never replaced unless "
-        "--overwrite is given.",
+        "`hdrjax tonemap` for tone mapping). An existing output is replaced (never the "
+        "input) unless --no-clobber is given.",
     )
     p.add_argument("input", help="HDR file: .exr, .hdr or .pfm")
     p.add_argument("-o", "--output", required=True, help="output file; '-': standard output")
@@ -60,7 +63,13 @@ def register(subparsers) -> None:
         help="LDR outputs: multiply by 2^EV before clipping (default 0)",
     )
     p.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG/TIFF bit depth")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    p.add_argument(
+        "--overwrite",
+        dest=argparse.SUPPRESS,
+        nargs=0,
+        action=DeprecatedAlias,
+        replacement="outputs are replaced by default now (--no-clobber refuses them)",
+    )
     p.set_defaults(func=run)
 
 
@@ -81,8 +90,6 @@ def run(args: argparse.Namespace) -> int:
     if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
     refuse_overwriting_inputs([args.output], [args.input])
-    if args.output != "-" and os.path.exists(args.output) and not args.overwrite:
-        raise DataError(f"{args.output}: already exists (use --overwrite)")
     part = int(args.part) if args.part is not None and args.part.isdigit() else args.part
     try:
         img = hio.read(args.input, part=part, layer=args.layer)
@@ -93,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
             out = np.asarray(encode(rgb, "srgb"))
             with output_file(args) as path:
                 hio.write_display(
-                    path, quantize(out, args.bits), bits=args.bits, overwrite=args.overwrite
+                    path, quantize(out, args.bits), bits=args.bits, overwrite=not args.no_clobber
                 )
         else:
             with warnings.catch_warnings(record=True) as caught:
@@ -105,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
                         pixel_type=args.pixel_type,
                         compression=args.compression,
                         sidecars=True if args.sidecars else None,
-                        overwrite=args.overwrite,
+                        overwrite=not args.no_clobber,
                     )
             for w in caught:
                 print(f"note: {w.message}")

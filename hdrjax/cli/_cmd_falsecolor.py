@@ -9,10 +9,12 @@ from ._common import (
     add_format_argument,
     output_ext,
     output_file,
+    positive_float,
     read_image,
     refuse_overwriting_inputs,
     value_range,
 )
+from ._grid import add_grid_arguments, draw_grid
 
 DISPLAY_EXT = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 FIGURE_EXT = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -98,7 +100,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--name", help="quantity name for the legend (default from the file)")
     p.add_argument("--unit", help="unit for the legend (default from the file)")
-    p.add_argument("--scale", type=float, default=1.0, help="multiply the values first")
+    p.add_argument("--scale", type=positive_float, default=1.0, help="multiply the values first")
     for opt, default in (
         ("under", "black"),
         ("over", "white"),
@@ -107,6 +109,7 @@ def register(subparsers) -> None:
         ("neginf", "navy"),
     ):
         p.add_argument(f"--{opt}", default=default, help=f"colour (default {default})")
+    add_grid_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -116,7 +119,7 @@ def _values(args: argparse.Namespace):
 
     from ..layers import MissingLayerError
 
-    img = read_image(args.input)
+    img = args.image_file = read_image(args.input)  # --grid reads its projection and layers
     if args.layer:
         try:
             v = np.asarray(img.layer(args.layer), np.float32)
@@ -195,7 +198,8 @@ def run(args: argparse.Namespace) -> int:
         )
     except ValueError as e:
         raise UsageError(str(e)) from None
-    out = fc.composite() if legend == "side" else np.asarray(fc.image)
+    shown = draw_grid(args, args.image_file, np.asarray(fc.image))
+    out = fc.scale.composite(shown, specials=fc.specials) if legend == "side" else shown
     try:
         with output_file(args) as path:
             hio.write_display(path, out)

@@ -309,7 +309,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {label}: {float(s):.6g}")
     print(f"loss: {float(res.loss):.6g}")
     print(f"steps: {int(res.steps)}")
-    status = "converged" if ok else f"not converged: {optx.RESULTS[res.result]}"
+    status = "converged" if ok else f"not converged: {optx.RESULTS[res.result]}"  # type: ignore[misc]
     print(f"status: {status}")
     if not ok and not args.force:
         print(f"not written: {args.output} (the fit did not converge; --force writes it)")

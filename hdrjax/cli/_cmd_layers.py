@@ -92,7 +92,7 @@ def describe(path: str) -> dict:
         "data_window": list(img.data_window) if img.data_window else None,
         "display_window": list(img.display_window) if img.display_window else None,
     }
-    layers = {}
+    layers: dict[str, dict[str, object]] = {}
     for key in sorted(img.layers):
         v = img.layers[key]
         if isinstance(v, dict):

@@ -1,4 +1,4 @@
-"""``hdrjax lights FILE -o overlay.png --json lights.json``: find the light sources of a map."""
+"""``hdrjax lights FILE -o overlay.png --json-out lights.json``: find the light sources of a map."""
 
 import argparse
 import json
@@ -7,6 +7,7 @@ import time
 
 from ._common import (
     DataError,
+    DeprecatedAlias,
     UsageError,
     positive_float,
     positive_int,
@@ -37,12 +38,17 @@ def register(subparsers) -> None:
         help="find the light sources of an environment map (or a plain image)",
         description="Find the light sources of an equirectangular environment map (Loghin "
         "2019) or, with --method median-cut, Debevec's median-cut lights. Prints one "
-        "line per light; --json writes directions, sizes and energy shares, -o draws them over "
+        "line per light; --json-out writes directions, sizes and energy shares, -o draws them over "
         "the tone-mapped map (blue: local maxima, cyan: light centres, red: joined samples).",
     )
     p.add_argument("input", help="HDR image: .exr, .hdr (Radiance RGBE) or .pfm")
     p.add_argument("-o", "--output", help="overlay image (.png, .jpg, .pdf, .svg)")
-    p.add_argument("--json", dest="json_path", help="write the lights as JSON here")
+    p.add_argument(
+        "--json-out", dest="json_path", metavar="FILE.json", help="write the lights as JSON here"
+    )
+    p.add_argument(
+        "--json", dest="json_path", action=DeprecatedAlias, replacement="use --json-out FILE.json"
+    )
     p.add_argument(
         "--method",
         choices=("loghin2019", "median-cut"),
@@ -122,7 +128,10 @@ def _projection(args: argparse.Namespace, img, shape: tuple[int, ...]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    for path, kind, exts in ((args.output, "-o", OVERLAY_EXT), (args.json_path, "--json", None)):
+    for path, kind, exts in (
+        (args.output, "-o", OVERLAY_EXT),
+        (args.json_path, "--json-out", None),
+    ):
         if path and exts and os.path.splitext(path)[1].lower() not in exts:
             raise UsageError(f"{kind} {path}: expected one of {', '.join(exts)}")
     if args.output and args.method == "median-cut":

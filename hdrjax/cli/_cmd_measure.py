@@ -1,11 +1,12 @@
 """``hdrjax measure FILE``: distance between pixels, readout at a pixel, region statistics."""
 
 import argparse
+import functools
 import json
 import os
 
 from ._cmd_export import as_data_error
-from ._common import DataError, UsageError, refuse_overwriting_inputs
+from ._common import DataError, DeprecatedAlias, UsageError, refuse_overwriting_inputs
 
 
 def _point(text: str) -> tuple[float, float]:
@@ -22,6 +23,18 @@ def _rect(text: str) -> tuple[float, float, float, float]:
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected X0,Y0,X1,Y1, got {text!r}") from None
     return x0, y0, x1, y1
+
+
+def _sensor_size(text: str) -> tuple[float, float]:
+    """argparse type: ``W×H`` millimetres (``36x24``, ``36×24`` or ``36,24``), both > 0."""
+    parts = text.replace("×", "x").replace("X", "x").replace(",", "x").split("x")
+    try:
+        w, h = (float(v) for v in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WxH in millimetres, got {text!r}") from None
+    if not (0 < w < float("inf") and 0 < h < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected sizes > 0 in millimetres, got {text!r}")
+    return w, h
 
 
 def register(subparsers) -> None:
@@ -44,11 +57,19 @@ def register(subparsers) -> None:
         help="2D distance even when the file has positions",
     )
     p.add_argument(
-        "--scale",
+        "--view-scale",
+        dest="scale",
         type=float,
         default=100.0,
         metavar="PERCENT",
         help="coordinates are on a view scaled to PERCENT of the pixel grid (default 100)",
+    )
+    p.add_argument(
+        "--scale",
+        dest="scale",
+        type=float,
+        action=DeprecatedAlias,
+        replacement="use --view-scale PERCENT (--scale is a multiplier elsewhere)",
     )
     p.add_argument("--at", type=_point, metavar="X,Y", help="print the readout at a pixel")
     p.add_argument("--rect", type=_rect, metavar="X0,Y0,X1,Y1", help="rectangular region")
@@ -60,10 +81,45 @@ def register(subparsers) -> None:
         help="polygon region (3 or more vertices)",
     )
     p.add_argument("--region-out", metavar="FILE.json", help="save the region and its statistics")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --region-out")
+    p.add_argument(
+        "--overwrite",
+        dest=argparse.SUPPRESS,
+        nargs=0,
+        action=DeprecatedAlias,
+        replacement="outputs are replaced by default now (--no-clobber refuses them)",
+    )
     p.add_argument("--part", help="EXR part (index or name)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument(
+        "--sensor-size",
+        type=_sensor_size,
+        metavar="WxH",
+        help="the virtual sensor's width and height in millimetres (36x24, 36×24 or 36,24) "
+        "for 2D distances in metres; overrides the size the file records",
+    )
+    p.add_argument(
+        "-v", "--verbose", action="store_true", help="say where the sensor size came from"
+    )
     p.set_defaults(func=run)
+
+
+def _with_sensor_size(img, args: argparse.Namespace):
+    """``img`` with ``--sensor-size`` (mm) as its sensor size (metres); with ``--verbose``,
+    says whether that replaces the size the file records."""
+    import sys
+
+    size = (args.sensor_size[0] / 1000.0, args.sensor_size[1] / 1000.0)
+    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)  # JSON stays clean
+    if args.verbose:
+        given = f"{args.sensor_size[0]:g} mm x {args.sensor_size[1]:g} mm"
+        if img.sensor_size is None:
+            say(f"sensor size: {given} (--sensor-size; the file records none)")
+        elif any(abs(a - b) > 1e-6 * b for a, b in zip(img.sensor_size, size, strict=True)):
+            old = f"{img.sensor_size[0] * 1000:g} mm x {img.sensor_size[1] * 1000:g} mm"
+            say(f"sensor size: {given} (--sensor-size overrides the file's {old})")
+        else:
+            say(f"sensor size: {given} (--sensor-size, as the file records)")
+    return img.replace(sensor_size=size)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -78,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
     if args.a is None and args.at is None and not (args.rect or args.polygon):
         raise UsageError("nothing to measure: give --from X,Y --to X,Y, --at X,Y or a region")
     if not (args.scale > 0):
-        raise UsageError(f"--scale must be > 0, got {args.scale:g}")
+        raise UsageError(f"--view-scale must be > 0, got {args.scale:g}")
     refuse_overwriting_inputs([args.region_out], [args.input])
     if args.input != "-" and not os.path.exists(args.input):
         raise DataError(f"{args.input}: no such file")
@@ -86,6 +142,8 @@ def run(args: argparse.Namespace) -> int:
     out: dict = {}
     try:
         img = hio.read(args.input, part=part)
+        if args.sensor_size is not None:
+            img = _with_sensor_size(img, args)
         if args.a is not None:
             d = hm.distance(
                 img,
@@ -107,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
         if region is not None:
             out["region"] = {"region": region.to_dict(), "stats": hm.region_stats(img, region)}
             if args.region_out:
-                hm.save_region(args.region_out, img, region, overwrite=args.overwrite)
+                hm.save_region(args.region_out, img, region, overwrite=not args.no_clobber)
     except (ValueError, OSError) as e:
         raise as_data_error(e, args.input) from None
     if args.json:

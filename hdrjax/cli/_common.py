@@ -44,6 +44,17 @@ def positive_int(text: str) -> int:
     return v
 
 
+def odd_size(text: str) -> int:
+    """argparse type: an odd window size >= 1 (filters' K×K windows)."""
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an odd integer, got {text!r}") from None
+    if k < 1 or k % 2 == 0:
+        raise argparse.ArgumentTypeError(f"expected an odd window size >= 1, got {k}")
+    return k
+
+
 def positive_float(text: str) -> float:
     """argparse type: a finite float > 0."""
     try:
@@ -73,7 +84,7 @@ def refuse_overwriting_inputs(outputs, inputs) -> None:
     (stdin/stdout) is never a file."""
     from ..io._atomic import file_identity
 
-    read = {}
+    read: dict[tuple, str] = {}
     for p in inputs:
         if p is not None and os.fspath(p) != "-":
             read.setdefault(file_identity(p), os.fspath(p))
@@ -84,6 +95,58 @@ def refuse_overwriting_inputs(outputs, inputs) -> None:
         if src is not None:
             same = os.path.normpath(src) == os.path.normpath(os.fspath(p))
             raise UsageError(f"{p}: output is the input file" + ("" if same else f" {src}"))
+
+
+WRITING_DESTS = ("output", "json_path", "region_out", "legend", "save_response", "sheet")
+"""The parsed options that name a file a subcommand writes (``-o``, ``--json-out``,
+``--region-out``, ``--legend FILE``, ``--save-response``, ``--sheet``)."""
+
+
+def add_no_clobber_argument(p: argparse.ArgumentParser) -> None:
+    """``--no-clobber``: refuse an existing output (the default replaces it, as pfstools,
+    ImageMagick and OpenCV do; an input file is never replaced either way)."""
+    p.add_argument(
+        "--no-clobber",
+        action="store_true",
+        help="refuse to replace an existing output file (exit status 2); by default an "
+        "existing output is replaced, atomically, and an input file never is",
+    )
+
+
+def refuse_clobbering(args: argparse.Namespace) -> None:
+    """UsageError ``OUTPUT: already exists (--no-clobber)`` when ``--no-clobber`` was given
+    and a file the command would write exists (standard output, ``None`` and the
+    ``--legend side|none`` keywords are not files)."""
+    if not getattr(args, "no_clobber", False):
+        return
+    for dest in WRITING_DESTS:
+        path = getattr(args, dest, None)
+        if not isinstance(path, str) or path == "-":
+            continue
+        if dest == "legend" and path in ("side", "none"):
+            continue
+        if os.path.lexists(path):
+            raise UsageError(f"{path}: already exists (--no-clobber)")
+
+
+class DeprecatedAlias(argparse.Action):
+    """A renamed option's old spelling, kept hidden for one release: it stores into the new
+    option's ``dest`` (``nargs=0``: stores nothing) and prints one note on stderr naming
+    what to do instead (``replacement=``, e.g. ``"use --zlib-level"``)."""
+
+    def __init__(self, option_strings, dest, replacement: str, nargs=None, **kwargs):
+        kwargs["help"] = argparse.SUPPRESS
+        super().__init__(option_strings, dest, nargs=nargs, **kwargs)
+        self.replacement = replacement
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(
+            f"{parser.prog}: note: {option_string} is deprecated and will be removed; "
+            f"{self.replacement}",
+            file=sys.stderr,
+        )
+        if self.nargs != 0:
+            setattr(namespace, self.dest, values)
 
 
 def read_image(path: str):

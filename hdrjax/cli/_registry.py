@@ -3,7 +3,7 @@ and from modules that import JAX, without importing JAX.
 
 The parsers need the operators' names and parameter metadata (``--key``'s help and type,
 ``hdrjax operators``' listing and pages) and a few defaults (``lights --width``, ``batch
---compression``). Importing the registry imports JAX and equinox, which takes far longer
+--zlib-level``). Importing the registry imports JAX and equinox, which takes far longer
 than everything else ``hdrjax --help`` does, so ``hdrjax --help``, ``hdrjax <command>
 --help`` and ``hdrjax operators`` read them from ``_manifest.py``, which
 :func:`write_manifest` generates from the live registry (``python -m
@@ -175,9 +175,10 @@ def manifest_operators() -> tuple[OperatorEntry, ...]:
     """The built-in operators as recorded in ``_manifest.py``."""
     from . import _manifest
 
+    recorded: tuple[dict[str, Any], ...] = _manifest.OPERATORS
     return tuple(
         OperatorEntry(**{**op, "parameters": tuple(ParameterEntry(**p) for p in op["parameters"])})
-        for op in _manifest.OPERATORS
+        for op in recorded
     )
 
 

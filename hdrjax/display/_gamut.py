@@ -67,7 +67,7 @@ from .._colour import REC709_WEIGHTS, channel_max, channel_min
 
 GamutMethod = Literal["clip", "luminance", "compress"]
 GAMUT_METHODS: tuple[str, ...] = ("clip", "luminance", "compress")
-DEFAULT_GAMUT = "luminance"
+DEFAULT_GAMUT: GamutMethod = "luminance"
 """The gamut mapping of :func:`hdrjax.display.encode` for a display (see the module doc)."""
 
 RGC_LIMIT = (1.147, 1.264, 1.312)

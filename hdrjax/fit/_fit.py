@@ -38,12 +38,14 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from .. import _check
-from ..operators import make_operator
+from .._progress import compiled_progress, tick, wait_ready
+from ..operators import make_operator, parameter_info
 from ..operators._base import AbstractOperator, as_float_image
 from ..targets import AbstractTarget, Combined, Scaled
 
@@ -92,6 +94,55 @@ class FitResult(eqx.Module):
                 raise ValueError(f"sensitivity: {n} is not a scalar parameter; use .jacobian")
             cols.append(j * p[..., None] / self.statistics)
         return jnp.stack(cols, axis=-1)
+
+    def _outcome(self) -> str:
+        """``converged`` or the solver's reason (first sentence); ``k of n converged`` for a
+        batch."""
+        ok = np.asarray(self.success)
+        if ok.ndim:
+            return f"{int(ok.sum())} of {ok.size} converged"
+        if ok:
+            return "converged"
+        # optx.RESULTS is indexed by its metaclass (an equinox Enumeration), unseen by mypy
+        return optx.RESULTS[self.result].split(". ")[0].rstrip(".")  # type: ignore[misc]
+
+    def __repr__(self) -> str:
+        """``FitResult(reinhard2002: key=0.21; loss 3.2e-07, 12 steps, converged)``."""
+        from .. import _repr
+
+        if not _repr.concrete(self.loss):
+            return f"FitResult({self.operator.name}: {', '.join(self.names)}; traced)"
+        units = {i.name: _repr.short_unit(i.unit) for i in parameter_info(self.operator)}
+        fitted = ", ".join(
+            f"{n}={_repr.value(self.params[n], units.get(n, ''))}" for n in self.names
+        )
+        return (
+            f"FitResult({self.operator.name}: {fitted}; loss {_repr.value(self.loss)}, "
+            f"{_repr.value(self.steps)} steps, {self._outcome()})"
+        )
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the fitted values with their units, the loss, steps and
+        outcome, the statistics at the solution."""
+        from .. import _repr
+
+        if not _repr.concrete(self.loss):
+            return _repr.preformatted(repr(self))
+        infos = {i.name: i for i in parameter_info(self.operator)}
+        rows = [
+            (n, _repr.value(self.params[n]), infos[n].unit if n in infos else "")
+            for n in self.names
+        ]
+        rows += [
+            ("loss Σ r²", _repr.value(self.loss), ""),
+            ("steps", _repr.value(self.steps), ""),
+            ("outcome", self._outcome(), ""),
+            ("statistics", _repr.value(self.statistics), ""),
+            ("residuals", _repr.value(self.residuals), ""),
+        ]
+        title = f"FitResult: {type(self.operator).__name__} ({self.operator.name})"
+        body = _repr.table(rows, ("fitted", "value", "unit"))
+        return _repr.view(title, body, note=f"operator: {self.operator!r}")
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -257,7 +308,7 @@ def _dense_jvp(fn: Callable[[Any], Array]) -> Callable[[Any], Array]:
     return dense
 
 
-def _solve_one(prob, op, image, target, solver, max_steps, max_size):
+def _solve_one(prob, op, image, target, solver, max_steps, max_size, ticks=False):
     op = op.measure(image) if prob.measure else op
     small = downscale(image, max_size)
 
@@ -268,6 +319,8 @@ def _solve_one(prob, op, image, target, solver, max_steps, max_size):
     dense = _dense_jvp(residuals) if isinstance(solver, optx.AbstractLeastSquaresSolver) else None
 
     def fn(z, args):
+        if ticks:  # the solver evaluates the residuals once per step
+            tick(jnp.zeros(()))
         return dense(z) if dense is not None else residuals(z)
 
     sol = optx.least_squares(fn, solver, prob.to_free(op), max_steps=max_steps, throw=False)
@@ -279,8 +332,8 @@ def _throw(res: FitResult) -> FitResult:
 
 
 @eqx.filter_jit
-def _fit_jit(prob, op, image, target, solver, max_steps, max_size, throw):
-    res = _solve_one(prob, op, image, target, solver, max_steps, max_size)
+def _fit_jit(prob, op, image, target, solver, max_steps, max_size, throw, ticks=False):
+    res = _solve_one(prob, op, image, target, solver, max_steps, max_size, ticks)
     return _throw(res) if throw else res
 
 
@@ -360,9 +413,9 @@ def _maximises(target: AbstractTarget) -> bool:
 @functools.lru_cache(maxsize=32)
 def _default_solver(rtol: float, atol: float, maximise: bool = False) -> optx.LevenbergMarquardt:
     # built once per tolerance pair: the constructor's checks cost ~0.3 ms a call
-    solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
+    solver: optx.LevenbergMarquardt = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
     low = {"low_cutoff": _MAXIMISE_LOW_CUTOFF} if maximise else {}
-    search = optx.ClassicalTrustRegion(high_cutoff=_HIGH_CUTOFF, **low)
+    search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion(high_cutoff=_HIGH_CUTOFF, **low)
     return eqx.tree_at(lambda s: s.search, solver, search)
 
 
@@ -490,8 +543,15 @@ def fit(
     atol: float | None = None,
     max_size: int | None = 64,
     throw: bool = False,
+    progress: bool = True,
 ) -> FitResult:
     """Fit operator parameters so the tone-mapped image meets ``target`` (jit-compiled).
+
+    Where a person watches (a terminal or a Jupyter notebook; never in a pipe, a log or
+    inside an enclosing ``jit``) and ``progress`` is true, a counter shows the solver's
+    steps as they happen (its evaluations of the residuals: one per step for the default
+    solver), for fits that last over a second; the call then returns when the fit is
+    done.
 
     Returns:
         A :class:`FitResult`; check ``result.success`` (or pass ``throw=True``).
@@ -509,7 +569,14 @@ def fit(
     image = as_float_image(image, "image")
     if image.ndim != 3:
         raise ValueError(f"image: expected (H, W, 3), got {image.shape}; use fit_batch")
-    return _fit_jit(prob, op, image, target, solver, int(max_steps), max_size, bool(throw))
+    show = progress and not isinstance(image, jax.core.Tracer)
+    with compiled_progress(show, unit="step", desc=f"fit {op.name}") as ticks:
+        res = _fit_jit(
+            prob, op, image, target, solver, int(max_steps), max_size, bool(throw), ticks
+        )
+        if ticks:
+            wait_ready(res)
+    return res
 
 
 fit.__doc__ = fit.__doc__.replace(  # type: ignore[union-attr]

@@ -13,12 +13,12 @@ encoded for (``display=``, sRGB by default; the primaries and curve come from
   HLG) an ``iCCP`` ICC profile (with ``gAMA`` 1/2.2 approximating the sRGB curve, never
   for PQ or HLG). ``sRGB`` and ``iCCP`` are never both written (the specification forbids
   it). Readers that know ``cICP`` use it first, then ``iCCP``, ``sRGB``, ``cHRM``/``gAMA``.
-* TIFF (tag 34675) and JPEG (APP2, by Pillow): an ICC v2.4 display profile written by
+* TIFF (tag 34675, by tifffile) and JPEG (APP2, by Pillow): an ICC v2.4 display profile written by
   hdrjax (:mod:`hdrjax.io._icc`) with the display's primaries, white and curve.
 
 PQ and HLG files must be 16-bit (PNG or TIFF): 8 bits band visibly over their range, so
-``bits=8`` and JPEG are refused for them. PNG and TIFF are written by hdrjax itself
-(zlib + struct), so 16-bit RGB works; JPEG uses Pillow (8 bit only).
+``bits=8`` and JPEG are refused for them. PNG is written by hdrjax itself (zlib + struct),
+TIFF by tifffile, so 16-bit RGB works in both; JPEG uses Pillow (8 bit only).
 """
 
 import io as _io
@@ -175,63 +175,34 @@ def encode_png(
     return b"".join(out)
 
 
-def encode_tiff(
-    code: np.ndarray, icc: bytes | None = None, compression: int = DEFAULT_COMPRESSION
-) -> bytes:
-    """Baseline little-endian TIFF (one deflate strip at zlib level ``compression``) for
-    uint8/uint16 ``(H, W, C)``."""
+def write_tiff(
+    path: str | os.PathLike,
+    code: np.ndarray,
+    icc: bytes | None = None,
+    compression: int = DEFAULT_COMPRESSION,
+) -> None:
+    """Baseline little-endian TIFF of uint8/uint16 ``(H, W, C)`` code values, by tifffile.
+
+    Chunky (interleaved) samples; Adobe deflate strips at zlib level ``compression`` (0:
+    uncompressed); the ICC profile in tag 34675; ``Software`` "hdrjax"; a fourth channel is
+    unassociated alpha (ExtraSamples 2). tifffile's shaped-array JSON description is left out.
+    """
+    import tifffile
+
     compression = _check_compression(compression)
-    h, w, c = code.shape
-    bits = 16 if code.dtype == np.uint16 else 8
-    data = zlib.compress(
-        np.ascontiguousarray(code, dtype="<u2" if bits == 16 else np.uint8).tobytes(), compression
+    c = code.shape[2]
+    tifffile.imwrite(
+        path,
+        code[:, :, 0] if c == 1 else code,
+        photometric="minisblack" if c == 1 else "rgb",
+        planarconfig="contig",
+        extrasamples=("unassalpha",) if c == 4 else None,
+        compression="zlib" if compression else None,
+        compressionargs={"level": compression} if compression else None,
+        iccprofile=icc or None,
+        software="hdrjax",
+        metadata=None,
     )
-    photometric = 1 if c == 1 else 2
-    extra = b""
-    base = 8  # IFD right after the header; values that do not fit come after the IFD
-
-    def short_list(vals: list[int]) -> bytes:
-        return struct.pack(f"<{len(vals)}H", *vals)
-
-    entries = [
-        (256, 4, 1, w),
-        (257, 4, 1, h),
-        (258, 3, c, short_list([bits] * c)),
-        (259, 3, 1, 8),  # Adobe deflate
-        (262, 3, 1, photometric),
-        (273, 4, 1, None),  # strip offset, filled below
-        (277, 3, 1, c),
-        (278, 4, 1, h),
-        (279, 4, 1, len(data)),
-        (284, 3, 1, 1),
-        (305, 2, 7, b"hdrjax\x00"),
-    ]
-    if c == 4:
-        entries.append((338, 3, 1, 2))  # unassociated alpha
-    if icc:
-        entries.append((34675, 7, len(icc), icc))
-    entries.sort(key=lambda e: e[0])
-    ifd_size = 2 + 12 * len(entries) + 4
-    off = base + ifd_size
-    resolved = []
-    for tag, typ, count, value in entries:
-        if isinstance(value, bytes) and len(value) > 4:
-            resolved.append((tag, typ, count, struct.pack("<I", off + len(extra))))
-            extra += value + (b"\x00" if len(value) % 2 else b"")
-        else:
-            resolved.append((tag, typ, count, value))
-    strip_off = off + len(extra)
-    ifd = struct.pack("<H", len(resolved))
-    for tag, typ, count, value in resolved:
-        if value is None:
-            value = strip_off
-        if isinstance(value, int):
-            raw = struct.pack("<H", value) + b"\x00\x00" if typ == 3 else struct.pack("<I", value)
-        else:
-            raw = value.ljust(4, b"\x00")
-        ifd += struct.pack("<HHI", tag, typ, count) + raw
-    ifd += struct.pack("<I", 0)
-    return b"II*\x00" + struct.pack("<I", base) + ifd + extra + data
 
 
 def encode_jpeg(code: np.ndarray, *, quality: int = 95, icc: bytes | None = None) -> bytes:
@@ -246,7 +217,7 @@ def encode_jpeg(code: np.ndarray, *, quality: int = 95, icc: bytes | None = None
     im = Image.fromarray(code[:, :, 0] if c == 1 else code, mode="L" if c == 1 else "RGB")
     buf = _io.BytesIO()
     # full-resolution chroma at high quality: tone-mapped renders have sharp colour edges
-    kw = {"quality": int(quality), "subsampling": 0 if quality >= 90 else 2}
+    kw: dict[str, int | bytes] = {"quality": int(quality), "subsampling": 0 if quality >= 90 else 2}
     if icc:
         kw["icc_profile"] = icc
     im.save(buf, format="JPEG", **kw)
@@ -319,10 +290,13 @@ def write_display(
     compression = _check_compression(compression)
     code = to_code_values(display_rgb, bits)
     grey = code.shape[2] == 1
+    if fmt == "tiff":
+        icc = display_profile(disp, grey=grey, peak=_peak())
+        with atomic_path(path, overwrite=overwrite) as tmp:
+            write_tiff(tmp, code, icc, compression)
+        return path
     if fmt == "png":
         data = encode_png(code, compression, display=disp)
-    elif fmt == "tiff":
-        data = encode_tiff(code, display_profile(disp, grey=grey, peak=_peak()), compression)
     else:
         data = encode_jpeg(
             code, quality=quality, icc=display_profile(disp, grey=grey, peak=_peak())
@@ -336,7 +310,7 @@ __all__ = [
     "DEFAULT_COMPRESSION",
     "DISPLAY_FORMATS",
     "encode_png",
-    "encode_tiff",
     "to_code_values",
     "write_display",
+    "write_tiff",
 ]

@@ -471,7 +471,7 @@ def decode_rgbe_float(data: bytes | memoryview, name: str = "image.hdr") -> tupl
             _to_float([planes[:, i, :] for i in range(4)], out[r0:r1])
         return out, info
     comps, info = _decode_components(data, name)
-    out = np.empty(comps[3].shape + (3,), np.float32)
+    out = np.empty((*comps[3].shape, 3), np.float32)
     for r0 in range(0, out.shape[0], 64):
         _to_float([c[r0 : r0 + 64] for c in comps], out[r0 : r0 + 64])
     return out, info
@@ -489,7 +489,9 @@ def float_to_rgbe(rgb: np.ndarray) -> np.ndarray:
     Negative values and NaN become 0 (RGBE holds only non-negative values); values above
     the largest representable (about 1.7e38) saturate.
     """
-    v = np.nan_to_num(np.asarray(rgb, dtype=np.float32), nan=0.0, posinf=np.finfo(np.float32).max)
+    v = np.nan_to_num(
+        np.asarray(rgb, dtype=np.float32), nan=0.0, posinf=float(np.finfo(np.float32).max)
+    )
     v = np.maximum(v, 0.0)
     vmax = v.max(axis=-1)
     mant, e = np.frexp(vmax)

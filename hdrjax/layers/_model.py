@@ -546,10 +546,11 @@ class LayeredImage:
         size, quantity and unit, primaries, projection and layers."""
         import html
 
-        from .._show import display_image, png_data_uri
+        from .. import _repr
+        from .._show import display_image
 
         try:
-            thumb = f'<img src="{png_data_uri(display_image(self))}" style="max-width:256px">'
+            thumb = _repr.thumbnail(display_image(self))
         except (ValueError, TypeError) as e:  # an image with no RGB interpretation
             thumb = f"<i>no thumbnail: {html.escape(str(e))}</i>"
         rows = [
@@ -563,15 +564,7 @@ class LayeredImage:
         if self.white_luminance is not None:
             rows.append(("white luminance", f"{self.white_luminance:g} cd/m²"))
         rows += [(f"layer {k}", v) for k, v in self._layer_kinds()]
-        cells = "".join(
-            f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
-            f"<td style='text-align:left'>{html.escape(v)}</td></tr>"
-            for k, v in rows
-        )
-        return (
-            f"<div><b>{html.escape(self.name)}</b><div style='display:flex;gap:1em'>"
-            f"{thumb}<table>{cells}</table></div></div>"
-        )
+        return _repr.view(self.name, _repr.table(rows), image=thumb)
 
     def describe(self) -> str:
         """A short multi-line summary (size, channels, quantity, layers) for listings."""

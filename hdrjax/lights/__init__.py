@@ -5,7 +5,8 @@
 - :func:`median_cut` — Debevec 2005 median-cut light extraction, for comparison.
 - :func:`plot_lights` — Loghin 2019's figures (local maxima, light positions, joined samples).
 - Directions: hdrjax's convention is :mod:`hdrjax.panorama`'s (Y-up, looking along −Z,
-  +X right; azimuth/elevation as in ``SOURCES.md``); :func:`convert_direction` gives
+  +X right; azimuth 0° at the image centre, positive to the right, elevation +90° at the
+  top row); :func:`convert_direction` gives
   Blender, pbrt, Mitsuba and OpenEXR directions, :func:`to_z_up` / :func:`to_y_up` swap
   the up axis.
 """

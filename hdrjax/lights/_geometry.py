@@ -2,7 +2,7 @@
 
 Image coordinates: ``u, v ∈ [0, 1]`` with ``v = 0`` the **top** row; pixel ``(x, y)`` (column,
 row; integers at pixel centres) sits at ``u = (x + 0.5) / W``, ``v = (y + 0.5) / H``.
-Azimuth and elevation are those of ``../shared/data/hdr/SOURCES.md``:
+Azimuth and elevation:
 ``az = 360° · u − 180°`` (0 at the image centre, positive to the right) and
 ``el = 90° − 180° · v``.
 
@@ -11,8 +11,9 @@ right-handed, looking along −Z with +X to the right**::
 
     d = (cos el · sin az, sin el, −cos el · cos az)
 
-Other renderers map the same pixel to other directions
-(``../shared/reference/formulas.md`` §6.2):
+Other renderers map the same pixel to other directions (read from their sources: Blender
+Cycles' ``direction_to_equirectangular_range``, pbrt-v3's ``InfiniteAreaLight``, Mitsuba 3's
+``envmap`` emitter, OpenEXR's ``Imf::LatLongMap``):
 
 - ``"blender"`` (Cycles, Z-up): image centre +X, right −Y:
   ``d = (cos el cos az, −cos el sin az, sin el)``;

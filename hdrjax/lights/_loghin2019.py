@@ -56,9 +56,10 @@ box reduction there is no aliasing to remove, a blurred mask spreads beyond the 
 
 Automatic threshold (``threshold=None``), from the samples' median luminance ``m`` (the
 samples are uniform on the sphere: a solid-angle median) and the largest input luminance
-``M``: ``T = min(max(50 m, 0.02 M), 0.8 M)``. The first term is the bright-blob definition
-of ``SOURCES.md``; the cap reproduces the listing's 0.8 on LDR maps whose maximum is 1. A
-map with ``T < 2 m`` (black, constant, no contrast) has no light (``T = inf``).
+``M``: ``T = min(max(50 m, 0.02 M), 0.8 M)``. The first term is hdrjax's own definition
+of a bright blob (50 times the median, or 2 % of the maximum where that is higher); the cap
+reproduces the 0.8 of Loghin's listing on LDR maps whose maximum is 1. A map with
+``T < 2 m`` (black, constant, no contrast) has no light (``T = inf``).
 
 Known limits: within about ``max_radius`` of a pole a light spans more columns than its
 mask window, so its mask, energy and size are cut (its direction stays within a few
@@ -463,10 +464,10 @@ def _grow(filled: Array, above: Array, limit: int, history: bool = False) -> tup
         state = (pack(filled), (zeros,) * b1, jnp.int32(0), jnp.bool_(True))
         state = jax.lax.while_loop(lambda s: s[3] & (s[2] < n1), step, state)
     if b1 < bits:  # more steps, with all planes
-        fill, count, i, more = state
-        state = (fill, count + (zeros,) * (bits - b1), i, more)
+        fill, counted, i, more = state
+        state = (fill, counted + (zeros,) * (bits - b1), i, more)
         state = jax.lax.while_loop(lambda s: s[3] & (s[2] < limit), step, state)
-    fill, count, _, _ = state
+    fill, counted, _, _ = state
     # unpack: row y is bit y % 32 of word y // 32
     rows = np.arange(ny)
     word = jnp.asarray(rows // 32)
@@ -475,7 +476,7 @@ def _grow(filled: Array, above: Array, limit: int, history: bool = False) -> tup
     def unpack(m: Array) -> Array:
         return (m[..., word, :] >> bit) & 1
 
-    dist = sum(unpack(c).astype(jnp.int32) << b for b, c in enumerate(count))
+    dist = sum(unpack(c).astype(jnp.int32) << b for b, c in enumerate(counted))
     return unpack(fill).astype(bool), dist
 
 
@@ -1035,9 +1036,11 @@ def _find_batch(
     thr = flatten_batch(jnp.asarray(thr, prepared[0].dtype), batch)
     if math.prod(batch) == 1:  # no vmap: lets _find branch on the data
         first = jax.tree.map(lambda v: v[0], (prepared, smooth, thr))
-        out = jax.tree.map(lambda v: v[None], _find(*first[0], first[1], first[2], plan, True))
+        # mypy maps a star argument of unknown length onto every parameter (call-arg)
+        one = _find(*first[0], first[1], first[2], plan, True)  # type: ignore[call-arg]
+        out = jax.tree.map(lambda v: v[None], one)
     else:
-        out = jax.vmap(lambda p, s, t: _find(*p, s, t, plan))(prepared, smooth, thr)
+        out = jax.vmap(lambda p, s, t: _find(*p, s, t, plan))(prepared, smooth, thr)  # type: ignore[call-arg]
     out = {k: v.reshape(batch + v.shape[1:]) for k, v in out.items()}
     return Lights(
         **out,

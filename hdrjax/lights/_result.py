@@ -92,7 +92,8 @@ class Lights(eqx.Module):
 
     @property
     def azimuth(self) -> Float[Array, "*batch K"]:
-        """Degrees, hdrjax / SOURCES.md convention (0 for padding and plain images)."""
+        """Degrees, 0 at the image centre and positive to the right (hdrjax convention; 0
+        for padding and plain images)."""
         return jnp.where(self.valid, azimuth_elevation(self.direction)[0], 0.0)
 
     @property
@@ -176,6 +177,127 @@ class Lights(eqx.Module):
         }
         return json.dumps(doc, indent=2)
 
+    def _angles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:attr:`azimuth`, :attr:`elevation` and :attr:`angular_diameter` in NumPy, for
+        the printed views (the formulas of :func:`~hdrjax.lights.azimuth_elevation`; eager
+        JAX would compile a program per operation)."""
+        d = _np(self.direction).astype(np.float64)
+        az = np.degrees(np.arctan2(d[..., 0], -d[..., 2]))
+        el = np.degrees(np.arctan2(d[..., 1], np.hypot(d[..., 0], d[..., 2])))
+        c = np.clip(1 - _np(self.solid_angle) / (2 * math.pi), -1.0, 1.0)
+        return az, el, 2 * np.degrees(np.arccos(c))
+
+    def _where(self, k: int) -> str:
+        """Light ``k``'s position: azimuth/elevation and width on a sphere, else pixels."""
+        if self.projection == "equirectangular":
+            az, el, diameter = (float(a[k]) for a in self._angles())
+            return f"az {az:+.1f}°, el {el:+.1f}°, {diameter:.2g}° wide"
+        x, y = (float(v) for v in _np(self.pixel[k]))
+        return f"at x {x:.1f}, y {y:.1f} px"
+
+    def __repr__(self) -> str:
+        """``Lights(2 lights in an equirectangular 64×32 map: #1 az +36.0°, el +10.4°, 1.6°
+        wide, 63 % of the energy; …)``: the first three lights of one map, or the counts of
+        a batch."""
+        from .. import _repr
+
+        w, h = self.input_shape[1], self.input_shape[0]
+        kind = f"{self.projection} {w}×{h} map"
+        where = f"{'an' if self.projection[0] in 'aeiou' else 'a'} {kind}"
+        if not _repr.concrete(self.count):
+            return f"Lights(traced, {where})"
+        count = _np(self.count)
+        if count.ndim:
+            return f"Lights(batch {count.shape}: {_repr.value(count)} lights, {kind}s)"
+        n, share = int(count), _np(self.energy_share)
+        shown = [
+            f"#{k + 1} {self._where(k)}, {100 * share[k]:.3g} % of the energy"
+            for k in range(min(n, 3))
+        ]
+        more = [f"… {n - 3} more"] if n > 3 else []
+        cap = f" (capped; {int(self.n_found)} found)" if bool(self.truncated) else ""
+        lights = "1 light" if n == 1 else f"{n} lights"
+        return (
+            f"Lights({lights}{cap} in {where}" + (": " if n else "") + "; ".join(shown + more) + ")"
+        )
+
+    def overlay(self, size: int = 256) -> np.ndarray:
+        """``(h, w, 3)`` uint8 picture of one map's lights, at most ``size`` pixels wide:
+        each light's region in its own colour on dark grey (on a panorama, lighter lines mark
+        the horizon and azimuth 0), a white cross at its centre (:attr:`pixel`). The map
+        itself is not part of the result: :func:`hdrjax.lights.plot_lights` draws the
+        lights over it."""
+        lab = _np(self.labels)
+        if lab.ndim != 2:
+            raise ValueError("overlay: call it on one map's result, not a batch")
+        H, W = self.input_shape if self.input_shape != (0, 0) else lab.shape
+        f = min(1.0, size / W)
+        h, w = max(1, round(H * f)), max(1, round(W * f))
+        at, centres = self.labels_at((h, w)), _np(self.pixel)
+        palette = np.array(_PALETTE, np.uint8)
+        out = np.full((h, w, 3), 40, np.uint8)
+        if self.projection == "equirectangular":  # the horizon and straight ahead (az 0)
+            out[h // 2, :], out[:, w // 2] = 80, 80
+        out = np.where(at[..., None] >= 0, palette[np.maximum(at, 0) % len(palette)], out)
+        out = out.astype(np.uint8)
+        arm = max(2, w // 128)
+        for k in range(int(self.count)):
+            x, y = centres[k]
+            cx = int(np.clip((x + 0.5) * w / W - 0.5, 0, w - 1))
+            cy = int(np.clip((y + 0.5) * h / H - 0.5, 0, h - 1))
+            out[cy, max(0, cx - arm) : cx + arm + 1] = 255
+            out[max(0, cy - arm) : cy + arm + 1, cx] = 255
+        return out
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the lights' regions and centres (:meth:`overlay`) beside a
+        table of the lights (position, luminance, colour, share of the energy)."""
+        from .. import _repr
+
+        if not _repr.concrete(self.count) or _np(self.count).ndim:
+            return _repr.preformatted(repr(self))
+        sphere = self.projection == "equirectangular"
+        head = ["light"]
+        head += ["azimuth °", "elevation °", "diameter °", "solid angle sr"] if sphere else []
+        head += ["x px", "y px", "peak luminance", "mean luminance", "colour", "energy %"]
+        rows = []
+        az, el, diameter = self._angles()
+        a = {n: _np(getattr(self, n)) for n in _SHOWN}
+        for k in range(int(self.count)):
+            row = [f"#{k + 1}"]
+            if sphere:
+                row += [f"{az[k]:+.1f}", f"{el[k]:+.1f}", f"{diameter[k]:.3g}"]
+                row += [f"{a['solid_angle'][k]:.3g}"]
+            row += [f"{v:.1f}" for v in a["pixel"][k]]
+            row += [_repr.value(a[n][k]) for n in ("peak_luminance", "mean_luminance", "colour")]
+            row += [f"{100 * a['energy_share'][k]:.3g}"]
+            rows.append(row)
+        w, h = self.input_shape[1], self.input_shape[0]
+        title = f"Lights: {int(self.count)} in a {self.projection} {w}×{h} map"
+        note = (
+            f"threshold {_repr.value(self.threshold)} (the map's units); luminance in the "
+            "map's units; energy = Σ L dω"
+            + (f"; capped: {int(self.n_found)} found" if bool(self.truncated) else "")
+        )
+        image = _repr.thumbnail(self.overlay()) if self.labels.size else ""
+        return _repr.view(title, _repr.table(rows, head), image=image, note=note)
+
+
+_SHOWN = ("solid_angle", "pixel", "peak_luminance", "mean_luminance", "colour", "energy_share")
+"""The fields of each light that :meth:`Lights._repr_html_` tabulates."""
+
+_PALETTE = (
+    (230, 159, 0),
+    (86, 180, 233),
+    (0, 158, 115),
+    (240, 228, 66),
+    (0, 114, 178),
+    (213, 94, 0),
+    (204, 121, 167),
+)
+"""Region colours of :meth:`Lights.overlay` (Okabe and Ito's colour-blind-safe palette,
+without its black)."""
+
 
 def _finite_or_none(v: float) -> float | None:
     return v if math.isfinite(v) else None
@@ -203,7 +325,7 @@ class MedianCutLights(eqx.Module):
 
     @property
     def azimuth(self) -> Float[Array, "*batch N"]:
-        """Degrees, hdrjax / SOURCES.md convention."""
+        """Degrees, 0 at the image centre and positive to the right (hdrjax convention)."""
         return azimuth_elevation(self.direction)[0]
 
     @property

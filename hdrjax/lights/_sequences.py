@@ -1,6 +1,10 @@
 """Low-discrepancy point sets: van der Corput, Hammersley, Halton.
 
-Formulas (``../shared/reference/formulas.md`` §6.1; Loghin 2019's listing):
+Formulas (J. G. van der Corput, "Verteilungsfunktionen", Proc. Akad. Wetensch. Amsterdam
+38, 1935; J. M. Hammersley, D. C. Handscomb, "Monte Carlo Methods", Methuen 1964;
+J. H. Halton, "On the efficiency of certain quasi-random sequences of points in evaluating
+multi-dimensional integrals", Numerische Mathematik 2, 1960,
+https://doi.org/10.1007/BF01386213; Loghin 2019 samples the sphere with the Hammersley set):
 
 - van der Corput radical inverse in base 2 of a 32-bit index: reverse the bits (16-bit
   rotate, then swap bytes, nibbles, pairs, single bits) and multiply by ``2^-32``;

@@ -144,7 +144,11 @@ def _tiff_settings(tif: Any) -> _Settings:
     exif = exif_tag.value if exif_tag is not None and isinstance(exif_tag.value, dict) else {}
 
     def get(code: int) -> Any:
-        for name in (tifffile.TIFF.EXIF_TAGS.get(code), tifffile.TIFF.TAGS.get(code), code):
+        for name in (
+            tifffile.TIFF.EXIF_TAGS.get(code, None),
+            tifffile.TIFF.TAGS.get(code, None),
+            code,
+        ):
             if name is not None and name in exif:
                 return exif[name]
         tag = tags.get(code)
@@ -258,7 +262,7 @@ def _decode_as(path: str, rawmode: str) -> np.ndarray:
     from PIL import Image
 
     with Image.open(path) as im:
-        tiles = []
+        tiles: list[Any] = []
         for t in im.tile:
             args = (rawmode, *t[3][1:]) if isinstance(t[3], tuple) else rawmode
             tiles.append(t._replace(args=args) if hasattr(t, "_replace") else (*t[:3], args))

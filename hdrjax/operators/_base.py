@@ -586,12 +586,36 @@ class AbstractOperator(eqx.Module):
             out[f.name] = v
         return out
 
-    def halo(self, shape: tuple[int, ...]) -> tuple[int, int]:
+    def halo(self, shape: tuple[int, ...]) -> tuple[float, float]:
         """Pixels ``(rows, columns)`` a tile of an image of ``shape`` needs on each side to
         be mapped as in the whole image: 0 for pointwise operators (the default); a
         neighbourhood operator returns its reach."""
         del shape
         return 0, 0
+
+    def __repr__(self) -> str:
+        """``Reinhard2002(key=0.18, L_white=None, …)``: the values (with their units), not
+        the array shapes equinox shows."""
+        from .. import _repr
+
+        units = {i.name: _repr.short_unit(i.unit) for i in parameter_info(self)}
+        return _repr.call(self, units=units)
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: each parameter's value, unit, range and meaning, and the
+        paper."""
+        from .. import _repr
+
+        rows = []
+        for info in parameter_info(self):
+            v = getattr(self, info.name)
+            shown = "measured from the image" if v is None and info.estimated else None
+            rows.append(
+                (info.name, shown or _repr.value(v, info.unit), info.range_text(), info.help)
+            )
+        head = ("parameter", "value", "valid", "meaning")
+        title = f"{type(self).__name__} ({self.name})" if self.name else type(self).__name__
+        return _repr.view(title, _repr.table(rows, head), note=self.reference)
 
 
 def statistics_of(p: Prepared, settings: StatisticsSettings | tuple | None) -> Statistics | None:
@@ -911,8 +935,9 @@ def measure_in_space(op: _Op, rgb: Array, matrix: np.ndarray | None) -> _Op:
         return _measure_jit(op, rgb) if matrix is None else op
     if _luminance_only(op):
         w = tuple(float(v) for v in np.asarray(op.weights_, np.float64) @ matrix)
-        measured = _measure_jit(dataclasses.replace(op, weights=w), rgb)
-        return dataclasses.replace(measured, weights=op.weights_)
+        # weights: a field of the luminance operators (checked above), not of the base class
+        measured = _measure_jit(dataclasses.replace(op, weights=w), rgb)  # type: ignore[call-arg]
+        return dataclasses.replace(measured, weights=op.weights_)  # type: ignore[call-arg]
     return _measure_converted_jit(op, rgb, matrix)
 
 
@@ -977,7 +1002,7 @@ def _apply_converted_jit(
     # mapping multiplies the converted pixels by its ratio: the conversion is part of the
     # mapping's one loop (converting its output instead reads each output three times,
     # and the curve is evaluated again for each)
-    native = dataclasses.replace(op, weights=native_weights)
+    native = dataclasses.replace(op, weights=native_weights)  # type: ignore[call-arg]
 
     def run(p: Prepared) -> Array:
         return native._measure(p)._apply(dataclasses.replace(p, to_space=matrix))

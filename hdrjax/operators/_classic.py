@@ -79,11 +79,12 @@ def _log1p_product(a: Array, x: Array) -> Array:
 class _MaxNormalised(AbstractLuminanceCurve):
     """Operators whose only statistic is the largest luminance ``L_max``."""
 
+    # L_max: a field of each subclass (the mixin declares no field, to keep their order)
     def statistics_settings(self) -> StatisticsSettings | None:
-        return None if self.L_max is not None else StatisticsSettings()
+        return None if self.L_max is not None else StatisticsSettings()  # type: ignore[attr-defined]
 
     def bind(self, stats: Statistics | None):
-        if self.L_max is not None:
+        if self.L_max is not None:  # type: ignore[attr-defined]
             return self
         return fill(self, L_max=max_luminance(bound_stats(self, stats)))
 

@@ -2,7 +2,9 @@
 
 Birukov et al. 2022 ("controlled by a single parameter, the maximum luminance, given directly or
 through exposure time, f-number and camera sensitivity"). The photographic relation is ISO
-12232's saturation-based speed (formulas.md §5; colour-hdri ``exposure/dsc.py``):
+12232:2006's saturation-based speed (ISO 12232:2006, "Photography — Digital still
+cameras — Determination of exposure index, ISO speed ratings, standard output sensitivity,
+and recommended exposure index"; as colour-hdri's ``exposure/dsc.py`` implements it):
 ``H = q L t / N²`` (focus at infinity, no flare) saturates at ``H_sat = 78 / S``, so the
 luminance that just saturates the sensor is ``L_max = 78 N² / (q S t)`` with the lens factor
 ``q = (π/4) T v cos⁴θ = 0.6516`` (T = 0.9, v = 0.98, θ = 10°). With

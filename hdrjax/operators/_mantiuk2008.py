@@ -46,7 +46,7 @@ the saturation factor).
 
 import functools
 import math
-from typing import ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 import jax
 import jax.numpy as jnp
@@ -638,7 +638,7 @@ def rendition_curve(
     return jnp.where(has, value, value[lo] + t * (value[hi] - value[lo]))
 
 
-def _display_field(help: str, unit: str, range: str) -> object:
+def _display_field(help: str, unit: str, range: str) -> Any:
     return parameter(None, help=f"{help}; None: the display's", unit=unit, range=range)
 
 

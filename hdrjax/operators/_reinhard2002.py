@@ -10,7 +10,8 @@ Global operator (paper Eqs. 1–4):
     ``L̄_w = exp(mean(ln(δ + L_w)))``, ``L = a L_w / L̄_w``,
     ``L_d = L (1 + L / L_white²) / (1 + L)``, colour scaled by ``L_d / L_w``.
 
-Automatic parameters (JGT; formulas.md §1.3), on the finite positive luminance:
+Automatic parameters (Reinhard 2002, JGT 7(1), Eqs. 4 and 5), on the finite positive
+luminance:
     key (Eq. 4): ``a = 0.18 · 4^((2 log2 L̄ − log2 L_1 − log2 L_99) / (log2 L_99 − log2 L_1))``
     with ``L_1``/``L_99`` the 1st/99th percentiles and ``L̄`` the log-average of the pixels
     at or below ``L_99`` (0.18 when ``L_99 = L_1``);

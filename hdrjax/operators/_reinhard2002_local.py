@@ -1,7 +1,8 @@
 """Reinhard et al. 2002 local operator ("automatic dodging-and-burning") and the JGT switch.
 
-Implements formulas.md §1.2 following Reinhard's reference code (as ported in LuminanceHDR
-and hdritools): Gaussian responses ``V1_i = L ⊗ R(s_i)`` at scales
+Implements the local operator of Reinhard, Stark, Shirley & Ferwerda 2002 (ACM TOG 21(3),
+https://doi.org/10.1145/566654.566575) following Reinhard's reference code (as
+ported in LuminanceHDR and hdritools): Gaussian responses ``V1_i = L ⊗ R(s_i)`` at scales
 ``s_i = s_low (s_high / s_low)^(i / num)`` (defaults 1, 43, 8, i.e. ≈ 1.6^i), each kernel
 integrated over the pixel with erf (``w(x) = erf(c (x + ½)) − erf(c (x − ½))``,
 ``c = 1 / (α₁ s)``, ``α₁ = 1 / (2√2)``); centre–surround activity

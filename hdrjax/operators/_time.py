@@ -18,7 +18,7 @@ ended with, therefore equals mapping it in one scan.
 
 import abc
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeGuard
 
 import jax
 import jax.numpy as jnp
@@ -63,7 +63,7 @@ def time_dependent_names() -> tuple[str, ...]:
     )
 
 
-def has_time_course(op: AbstractOperator) -> bool:
+def has_time_course(op: AbstractOperator) -> TypeGuard[AbstractTimeDependentOperator]:
     """Whether ``op`` declares a time course (``hdrjax batch --fps`` can run it)."""
     return isinstance(op, AbstractTimeDependentOperator)
 

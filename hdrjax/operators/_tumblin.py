@@ -8,7 +8,8 @@ References:
     (formulas 1 and 2).
     Reinhard et al. 2002, https://doi.org/10.1145/566654.566575 (formula 2).
 
-Formula 1 (formulas.md §2.1), absolute luminance in cd/m²:
+Formula 1 (Tumblin, Hodgins & Guenter 1999's revised Tumblin–Rushmeier operator, as
+Birukov et al. 2022 use it), absolute luminance in cd/m²:
     ``γ(L) = 2.655`` for L > 100 cd/m², else ``1.855 + 0.4 log10(L + 2.3·10⁻⁵)``;
     ``γ_w = γ(L_wa)``, ``γ_d = γ(L_da)``, ``γ_wd = γ_w / (1.855 + 0.4 ln L_da)``,
     ``m = C_max^((γ_wd − 1) / 2)``, ``L_d = m L_da (L_w / L_wa)^(γ_w / γ_d)``.
@@ -204,9 +205,10 @@ class TumblinReinhard(_AbstractTumblin):
 
     ``L_d = T(L_w) / L_dmax`` with ``T`` the revised Tumblin–Rushmeier curve (formula 1),
     then ``L_df = L_d (1 + L_d / L_white²) / (1 + L_d)`` (formula 2). The user controls the
-    two quantities of the seed: the scene adaptation luminance ``L_wa`` and the maximum world
-    luminance that is not clipped, ``L_max``; by default ``L_white = T(L_max) / L_dmax`` so
-    that exactly ``L_max`` maps to display white (1.0) and brighter pixels clip.
+    two quantities Birukov et al. name: the scene adaptation luminance ``L_wa`` and the
+    maximum world luminance that is not clipped, ``L_max``; by default
+    ``L_white = T(L_max) / L_dmax`` so that exactly ``L_max`` maps to display white (1.0)
+    and brighter pixels clip.
 
     Input: absolute RGB in cd/m² (relative images work, but ``L_wa`` then changes the
     contrast exponent: pass a scale). Output: display-referred linear RGB in [0, 1] for

@@ -1,10 +1,16 @@
 """Spherical panoramas, cube maps, fisheye and polar (goniometric) images, in JAX.
 
-Conversions to displayable views with bilinear sampling; the axis conventions are in the
+Conversions to displayable views with bilinear sampling, and pinhole (perspective) views
+of a panorama; the axis conventions are in the
 module doc of ``hdrjax.panorama._projections`` (Y up, looking along −Z, equirect centre
 straight ahead, top row the zenith).
 """
 
+from ._perspective import (
+    camera_basis as camera_basis,
+    equirect_to_perspective as equirect_to_perspective,
+    perspective_directions as perspective_directions,
+)
 from ._projections import (
     cubemap_directions as cubemap_directions,
     cubemap_to_equirect as cubemap_to_equirect,

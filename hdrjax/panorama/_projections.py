@@ -1,7 +1,7 @@
 """Panorama and goniometric projections with bilinear sampling, in JAX.
 
-Conventions (chosen once, see ../shared/reference/formulas.md §6; jit-, vmap- and
-grad-friendly; output sizes are static Python ints):
+Conventions (chosen once; jit-, vmap- and grad-friendly; output sizes are static Python
+ints):
 
 - **Directions**: right-handed, **Y up**, the viewer looks along **−Z**, **+X** is to the
   right. Azimuth ``az = atan2(d_x, −d_z)`` (0 straight ahead, positive to the right),
@@ -10,9 +10,8 @@ grad-friendly; output sizes are static Python ints):
   ``(i + 0.5, j + 0.5)``. Row 0 is the top.
 - **Equirectangular** ``(H, W)``: ``x = (az / 2π + 0.5) W``, ``y = (0.5 − el / π) H``, so
   the image centre looks ahead (−Z), ``x = 3W/4`` looks right (+X), the top row is the
-  zenith (+Y). This is the convention of ../shared/data/hdr/SOURCES.md
-  (``az = 360 (x + 0.5) / W − 180``, ``el = 90 − 180 (y + 0.5) / H``). Sampling wraps
-  around the left/right seam.
+  zenith (+Y): at pixel centres ``az = 360 (x + 0.5) / W − 180``,
+  ``el = 90 − 180 (y + 0.5) / H``. Sampling wraps around the left/right seam.
 - **Cube map**: faces ``(6, S, S, C)`` in the OpenGL order +X, −X, +Y, −Y, +Z, −Z, each
   face as OpenGL's ``GL_TEXTURE_CUBE_MAP`` table lays it out (face coordinates
   ``u, v ∈ [−1, 1]``, ``v`` down): +X ``(1, −v, −u)``, −X ``(−1, −v, u)``, +Y ``(u, 1, v)``,

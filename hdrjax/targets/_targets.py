@@ -195,7 +195,9 @@ class Percentiles(AbstractStatisticTarget):
             set from ``q`` at construction (``None``: always sort).
     """
 
-    q: Array = eqx.field(converter=_vec)
+    # field order: mypy reads the parent's abstract `weight` (given a default here) as
+    # coming before `q`; the class has its own __init__, so the order binds no argument
+    q: Array = eqx.field(converter=_vec)  # type: ignore[misc]
     value: Array = eqx.field(converter=_vec)
     weight: Array = eqx.field(default=1.0, converter=as_float_array)
     weights: tuple[float, float, float] = eqx.field(

@@ -5,7 +5,8 @@ from collections.abc import Iterator, Sequence
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _check
+from .. import _check, _progress
+from .._progress import progress_bar, wait_ready
 from .._stats import DEFAULT_BINS, DEFAULT_DELTA, LuminanceStats, Statistics
 from ..operators._base import AbstractOperator, StatisticsSettings
 from ._layout import Span, check_tile, spans
@@ -170,6 +171,7 @@ def apply(
     halo: int | Sequence[int] | None = None,
     stats: Statistics | None = None,
     out: np.ndarray | None = None,
+    progress: bool = True,
 ) -> np.ndarray:
     """Run a neighbourhood ``step`` on an image tile by tile, with halos.
 
@@ -196,6 +198,9 @@ def apply(
         out: preallocated result (e.g. ``np.memmap``), the image's shape; a new float32
             (float64 for float64 input under x64) array by default. May be ``image``
             itself for a pointwise step (halo 0).
+        progress: a progress bar over the tiles (tqdm) where a person watches: a
+            terminal or a Jupyter notebook (never in a pipe or a log), and only for a run
+            that lasts over a second. Ctrl-C stops the run between two tiles.
 
     Returns:
         ``out``.
@@ -218,7 +223,10 @@ def apply(
     bound = bind(step, image, shape, stats, tile)
     cdt = stats_dtype(np.asarray(image[:1, :1]).dtype)  # the filters' float promotion
     pending = None
-    for r, c in grid:
+    bar = progress_bar(
+        grid, enabled=progress, unit="tile", desc=type(step).__name__, delay=_progress.DELAY_S
+    )
+    for r, c in bar:
         window = jnp.asarray(np.asarray(image[r.window, c.window], dtype=cdt))
         result = bound(window)  # dispatched asynchronously: overlaps the copy-out below
         if pending is not None:
@@ -230,7 +238,7 @@ def apply(
 
 
 def _store(out, result, r: Span, c: Span) -> None:
-    out[r.out, c.out] = np.asarray(result)[r.crop, c.crop]
+    out[r.out, c.out] = np.asarray(wait_ready(result))[r.crop, c.crop]
 
 
 __all__ = ["DEFAULT_TILE", "apply", "operator_statistics", "statistics", "tile_grid"]

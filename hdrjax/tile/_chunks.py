@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _check
+from .. import _check, _progress
 from .._stats import Statistics
 from ..operators._base import AbstractOperator, StatisticsSettings, rgb_statistics
 from ._stats import merge_parts
@@ -110,7 +110,10 @@ def _chunk_statistics(op: AbstractOperator, chunk, matrix):
         from ..spaces import convert
 
         x = convert(x, matrix)
-    return rgb_statistics(x, op.weights_, StatisticsSettings(*op.statistics_settings()))
+    settings = op.statistics_settings()
+    if settings is None:
+        raise ValueError(f"{op.name}: measures nothing from the image; no chunk statistics")
+    return rgb_statistics(x, op.weights_, StatisticsSettings(*settings))
 
 
 @eqx.filter_jit
@@ -137,7 +140,7 @@ def statistics_chunked(
     if matrix is not None and not StatisticsSettings(*settings).channels and _has_weights(op):
         # the luminance of the converted pixels is that of the file's with the weights w M
         w = tuple(float(v) for v in np.asarray(op.weights_, np.float64) @ np.asarray(matrix))
-        stats_op, stats_matrix = dataclasses.replace(op, weights=w), None
+        stats_op, stats_matrix = dataclasses.replace(op, weights=w), None  # type: ignore[call-arg]
     m = None if stats_matrix is None else jnp.asarray(stats_matrix, rgb.dtype)
     parts, pending = [], None
     for _, part in _chunks(rgb, chunk, np.nan):
@@ -182,10 +185,13 @@ def map_chunked(
     *,
     chunk: tuple[int, int] = CHUNK,
     out: np.ndarray | None = None,
+    progress: bool = True,
 ) -> np.ndarray:
     """``fn`` (a compiled pointwise function of ``(rows, columns, C)`` images) over the
     fixed-shape chunks of ``rgb``'s pixels, assembled into ``out`` (a new array of the
-    image's rows and columns and ``fn``'s channels and dtype by default)."""
+    image's rows and columns and ``fn``'s channels and dtype by default). ``progress``: a
+    bar over the chunks where a person watches (:func:`hdrjax.tile.apply`'s); Ctrl-C stops
+    the run between two chunks."""
     shape = _check.shape(rgb, "rgb", channels=None, ndim=3)
     if not (isinstance(chunk, (tuple, list)) and len(chunk) == 2):
         raise ValueError(f"chunk: expected (rows, columns), two integers >= 1, got {chunk!r}")
@@ -193,7 +199,15 @@ def map_chunked(
     if out is not None and tuple(out.shape[:2]) != shape[:2]:
         raise ValueError(f"out: expected {shape[:2]} rows and columns, got shape {out.shape}")
     pending = None
-    for where, part in _chunks(rgb, chunk):
+    total = -(-shape[0] * shape[1] // (chunk[0] * chunk[1]))
+    bar = _progress.progress_bar(
+        _chunks(rgb, chunk),
+        total=total,
+        enabled=progress,
+        unit="chunk",
+        delay=_progress.DELAY_S,
+    )
+    for where, part in bar:
         res = fn(jnp.asarray(part))  # dispatched asynchronously: overlaps the copy below
         if out is None:
             out = np.empty(rgb.shape[:-1] + res.shape[2:], res.dtype)
@@ -207,7 +221,8 @@ def map_chunked(
 
 def _store(out: np.ndarray, where: slice, res) -> None:
     flat = out.reshape((-1,) + out.shape[2:])
-    flat[where] = np.asarray(res).reshape((-1,) + out.shape[2:])[: where.stop - where.start]
+    res = np.asarray(_progress.wait_ready(res))  # Ctrl-C is seen while it runs
+    flat[where] = res.reshape((-1,) + out.shape[2:])[: where.stop - where.start]
 
 
 def tonemap_chunked(
@@ -217,14 +232,16 @@ def tonemap_chunked(
     *,
     finish: Callable[[jax.Array], jax.Array] | None = None,
     chunk: tuple[int, int] = CHUNK,
+    progress: bool = True,
 ) -> tuple[AbstractOperator, np.ndarray]:
     """``(measured operator, output)``: :func:`measure_chunked`, then the operator and
     ``finish`` (e.g. a display encoding; pointwise, traceable) on each chunk, one compiled
-    program (:func:`map_chunked`)."""
+    program (:func:`map_chunked`, which draws the ``progress`` bar)."""
     rgb, chunk = _checked(op, rgb, chunk)
     measured = measure_chunked(op, rgb, matrix, chunk=chunk)
     m = None if matrix is None else tuple(map(tuple, np.asarray(matrix, np.float64).tolist()))
-    return measured, map_chunked(lambda x: _render(measured, x, m, finish), rgb, chunk=chunk)
+    render = lambda x: _render(measured, x, m, finish)  # noqa: E731
+    return measured, map_chunked(render, rgb, chunk=chunk, progress=progress)
 
 
 @eqx.filter_jit

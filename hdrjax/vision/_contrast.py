@@ -34,8 +34,8 @@ ContrastModel = Literal["pcond", "ward1994"]
 DISPLAY_MAX = 100.0
 """Default maximum display luminance, cd/m² (pcond.c ``LDMAX``)."""
 DISPLAY_RANGE = 32.0
-"""Default display dynamic range ``L_dmax/L_dmin`` (pcond.c v3.30 ``LDDYN``; formulas.md
-§3.3 quotes 100 from an older version)."""
+"""Default display dynamic range ``L_dmax/L_dmin`` (pcond.c v3.30 ``LDDYN``; older
+versions of pcond used 100)."""
 WEBER_ONSET = 10.0**1.9
 """cd/m²: above this the cone TVI is Weber's law ``ΔL ∝ L`` (Ferwerda et al. 1996), so the
 visibility-matching scale differs from plain luminance scaling by a display constant only."""

@@ -2,8 +2,7 @@
 
 Reference: H. W. Jensen, F. Durand, M. M. Stark, S. Premože, J. Dorsey, P. Shirley,
 "A Physically-Based Night Sky Model", SIGGRAPH 2001, pp. 399–408,
-doi:10.1145/383259.383306; transcribed from brainwagon/knight ``src/tonemap.c``
-(formulas.md §3.7).
+doi:10.1145/383259.383306; transcribed from brainwagon/knight ``src/tonemap.c``.
 
 Per pixel, with ``Y`` the luminance and ``V`` the scotopic luminance (cd/m²):
 

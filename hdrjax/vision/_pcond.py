@@ -3,7 +3,7 @@
 Reference: G. Ward Larson, H. Rushmeier, C. Piatko, "A Visibility Matching Tone Reproduction
 Operator for High Dynamic Range Scenes", IEEE TVCG 3(4), 1997, pp. 291–306,
 doi:10.1109/2945.646233; code: NREL/Radiance ``src/px/pcond.h``, ``pcond.c`` (v3.30),
-``pcond3.c``, ``pcond4.c``. Formulas as collected in formulas.md §3.3.
+``pcond3.c``, ``pcond4.c``.
 
 Numeric contract: linear RGB and luminances in cd/m²; outputs in cd/m².
 """
@@ -48,8 +48,9 @@ def acuity(L_a: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     """Highest resolvable spatial frequency, cycles/degree, at adaptation ``L_a`` (cd/m²).
 
     ``R(L_a) = 17.25 atan(1.4 log10 L_a + 0.35) + 25.72`` (pcond ``hacuity``, a fit to
-    Shlaer 1937; formulas.md §3.3). ``L_a`` is clamped to pcond's ``LMIN`` = 1e-7 cd/m²,
-    where ``R`` = 0.45 c/deg (the fit itself reaches 0 at ``L_a`` ≈ 6e-10).
+    S. Shlaer, "The relation between visual acuity and illumination", J. Gen. Physiol.
+    21(2), 1937, https://doi.org/10.1085/jgp.21.2.165). ``L_a`` is clamped to pcond's
+    ``LMIN`` = 1e-7 cd/m², where ``R`` = 0.45 c/deg (the fit itself reaches 0 at ``L_a`` ≈ 6e-10).
 
     Example:
         >>> round(float(acuity(1.0)), 2)

@@ -193,6 +193,44 @@ class SceneReport:
             )
         return "\n".join(lines)
 
+    def __repr__(self) -> str:
+        """One line: size and view, adaptation, luminance range, the selected effects (the
+        5th percentile only once it is known: a repr does not compute a deferred one)."""
+        v = self.view
+        p05 = self.p05_source
+        known = "" if callable(p05) else f", L_5% {float(p05):.4g} cd/m²"
+        return (
+            f"SceneReport({v.width}×{v.height} px, {v.hfov:.4g}°×{v.vfov:.4g}° {v.projection}, "
+            f"adaptation {self.adaptation_global:.4g} cd/m² (global), "
+            f"{self.adaptation_centre:.4g} cd/m² (centre), luminance {self.luminance_min:.4g}"
+            f" to {self.luminance_max:.4g} cd/m²{known}, "
+            f"effects: {', '.join(self.selected) or 'none'})"
+        )
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the measurements, then each effect's verdict and reason."""
+        from .. import _repr
+
+        v = self.view
+        rows = [
+            ("size", f"{v.width} × {v.height} px"),
+            ("view", f"{v.hfov:.4g}° × {v.vfov:.4g}° {v.projection}"),
+            ("adaptation, global", f"{self.adaptation_global:.4g} cd/m²"),
+            ("adaptation, centre", f"{self.adaptation_centre:.4g} cd/m²"),
+            ("5th-percentile luminance", f"{self.luminance_p05:.4g} cd/m²"),
+            ("luminance range", f"{self.luminance_min:.4g} to {self.luminance_max:.4g} cd/m²"),
+            ("glare PSF variant", self.glare_variant),
+            ("foveal image", _repr.value(self.adaptation_foveal, "cd/m²")),
+        ]
+        if self.n_nonfinite:
+            rows.append(("non-finite pixels", f"{self.n_nonfinite} (ignored)"))
+        effects = [
+            (d.name, "yes" if d.applies else "no", d.reason) for d in self.decisions.values()
+        ]
+        body = _repr.table(rows) + _repr.table(effects, ("effect", "applies", "because"))
+        note = f"effects simulated: {', '.join(self.selected) or 'none'}"
+        return _repr.view("SceneReport (Ward Larson et al. 1997's rules)", body, note=note)
+
 
 def _json_safe(x: Any) -> Any:
     if isinstance(x, dict):

@@ -3,7 +3,7 @@
 Reference: G. Spencer, P. Shirley, K. Zimmerman, D. P. Greenberg, "Physically-based glare
 effects for digital images", SIGGRAPH 1995, pp. 325–334, doi:10.1145/218380.218466, with
 the erratum on F. Durand's Interactive Tone Mapping page (θ in degrees, 19.75 in f3);
-weights as in snogglethorpe/snogray, Opioid/sprout and RichardBruce/RAPTor (formulas.md §3.5).
+weights as in snogglethorpe/snogray, Opioid/sprout and RichardBruce/RAPTor.
 
 With θ in degrees and λ in nm, the components are
 
@@ -16,8 +16,8 @@ each about one per steradian when integrated over the sphere (``∫ f dΩ`` ≈ 
 ``P = Σ w_i f_i`` with photopic weights (0.384, 0.478, 0.138, 0), mesopic
 (0.368, 0.478, 0.138, 0.016) and scotopic (0.282, 0.478, 0.207, 0.033); each set sums to 1.
 Which variant applies is not documented in any source found; this module picks it from the
-global adaptation luminance against pcond's mesopic limits 5.62e-3 and 5.62 cd/m²
-(formulas.md §3.8, marked unverified there).
+global adaptation luminance against pcond's mesopic limits 5.62e-3 and 5.62 cd/m² (Radiance
+``pcond.h``; the choice is hdrjax's, neither paper makes it).
 
 Discretisation (:func:`glare_kernel`): a pixel's weight is ``∫_pixel P dΩ`` over the
 pixel's square (flat angles, ``pixel_deg`` on each side): ``f0`` exactly (it is separable:

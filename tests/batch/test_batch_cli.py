@@ -67,7 +67,7 @@ def test_compression_level_changes_bytes_not_pixels(frames, tmp_path):
     sizes, pixels = {}, {}
     for level in ("0", "9"):
         out = tmp_path / f"out{level}"
-        argv = ["batch", *map(str, good[:2]), "-o", str(out), "--compression", level, "-q"]
+        argv = ["batch", *map(str, good[:2]), "-o", str(out), "--zlib-level", level, "-q"]
         assert main(argv) == 0
         with Image.open(out / "frame_000.png") as im:
             pixels[level] = np.asarray(im)
@@ -85,7 +85,7 @@ def test_compression_level_changes_bytes_not_pixels(frames, tmp_path):
         (["--method", "nosuch"], "unknown operator"),
         (["--format", "jpg", "--bits", "16"], "--bits 16"),
         (["--median", "4"], "odd"),
-        (["--compression", "12"], "--compression"),
+        (["--zlib-level", "12"], "--zlib-level"),
         (["--same-parameters", "--smooth"], "not allowed"),
     ],
 )

@@ -526,6 +526,11 @@ CASES: dict[str, Case] = {
         ("hdrjax.panorama.fisheye_to_equirect",),
         reach="linear",
     ),
+    "panorama.equirect_to_perspective": Case(
+        lambda x: hp.equirect_to_perspective(x, 6, 8, fov_deg=100.0, yaw_deg=30.0, pitch_deg=20.0),
+        ("hdrjax.panorama.equirect_to_perspective",),
+        reach="linear",
+    ),
     "panorama.polar_to_cartesian": Case(
         lambda x: hp.polar_to_cartesian(x, 8),
         ("hdrjax.panorama.polar_to_cartesian",),
@@ -980,6 +985,11 @@ _PARAMS: dict[str, tuple[tuple[str, Callable], ...]] = {
     "panorama.fisheye_to_equirect": (
         ("height", lambda x: hp.fisheye_to_equirect(x, 0)),
         ("fov_deg", lambda x: hp.fisheye_to_equirect(x, 8, fov_deg=-180.0)),
+    ),
+    "panorama.equirect_to_perspective": (
+        ("height", lambda x: hp.equirect_to_perspective(x, 0, 8)),
+        ("fov_deg", lambda x: hp.equirect_to_perspective(x, 6, 8, fov_deg=180.0)),
+        ("yaw_deg", lambda x: hp.equirect_to_perspective(x, 6, 8, yaw_deg=float("inf"))),
     ),
     "panorama.polar_to_cartesian": (
         ("size", lambda x: hp.polar_to_cartesian(x, 0)),

@@ -28,14 +28,28 @@ ARGV = {
     "falsecolor": (["-o", "OUT.png", "--legend", "none"], "OUT.png"),
     "filter": (["-o", "OUT.exr", "--mean", "3"], "OUT.exr"),
     "fit": (["-o", "OUT.png", "--target", "mean=0.2", "--max-steps", "3", "--force"], "OUT.png"),
+    "histogram": (["-o", "OUT.png"], "OUT.png"),
     "info": ([], None),
     "layers": ([], None),
-    "lights": (["--json", "OUT.json", "--width", "64"], "OUT.json"),
+    "lights": (["--json-out", "OUT.json", "--width", "64"], "OUT.json"),
     "measure": (["--at", "2,2"], None),
     # merge/fuse read a bracket of images, not one EXR: their unwritable-folder and full-disk
     # cases are in tests/merge/test_cli_merge.py
     "merge": (["-o", "OUT.exr"], None),
     "fuse": (["-o", "OUT.png"], None),
+    "panorama": (
+        [
+            "-o",
+            "OUT.exr",
+            "--projection",
+            "perspective",
+            "--input-projection",
+            "fisheye",
+            "--size",
+            "8",
+        ],
+        "OUT.exr",
+    ),
     "tonemap": (["-o", "OUT.png"], "OUT.png"),
     "vision": (["-o", "OUT.exr", "--scale", "100", "--effects", "none"], "OUT.exr"),
 }
@@ -131,6 +145,7 @@ UNKNOWN_METHOD = {
     "lights": (["--method", "nope"], "nope"),
     "vision": (["-o", "OUT.exr", "--scale", "100", "--effects", "nope"], "nope"),
     "falsecolor": (["-o", "OUT.png", "--cmap", "nope"], "nope"),
+    "histogram": (["-o", "OUT.png", "--method", "nope"], "nope"),
     "merge": (["-o", "OUT.exr", "--weights", "nope"], "nope"),
 }
 
@@ -149,6 +164,20 @@ INVALID_PARAMETER = {
     "compare": (["-o", "OUT.html", "--max-size", "0"], "--max-size"),
     "merge": (["-o", "OUT.exr", "--samples", "0"], "--samples"),
     "fuse": (["-o", "OUT.png", "--contrast", "-1"], "--contrast"),
+    "histogram": (["-o", "OUT.png", "--bins", "1"], "--bins"),
+    "panorama": (
+        [
+            "-o",
+            "OUT.exr",
+            "--projection",
+            "perspective",
+            "--input-projection",
+            "fisheye",
+            "--fov",
+            "200",
+        ],
+        "--fov",
+    ),
 }
 
 
@@ -205,8 +234,7 @@ def test_disk_full_keeps_the_previous_output(cmd, tmp_path, capsys, monkeypatch)
 
     real = atomic.os.replace
     monkeypatch.setattr(atomic.os, "replace", _enospc)
-    overwrite = ["--overwrite"] if cmd == "export" else []  # export refuses otherwise
-    code = _run([cmd, str(CORNELL), *_fill(extra, tmp_path), *overwrite])
+    code = _run([cmd, str(CORNELL), *_fill(extra, tmp_path)])
     monkeypatch.setattr(atomic.os, "replace", real)
     err = _one_line_error(capsys, cmd, code)
     assert "No space left on device" in err, err

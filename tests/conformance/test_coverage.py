@@ -142,6 +142,8 @@ EXEMPT = {
     "hdrjax.tile.dask_statistics": "dask statistics (tests/tile/test_dask.py)",
     # figures and parameter sweeps (matplotlib; solves over an operator)
     "hdrjax.plot.tone_curve": "matplotlib figure (tests/fit/test_study.py)",
+    "hdrjax.plot.angular_grid": "matplotlib drawing (tests/panorama/test_grid.py)",
+    "hdrjax.plot.with_angular_grid": "matplotlib drawing (tests/panorama/test_grid.py)",
     "hdrjax.study.sweep": "parameter sweep over an operator (tests/fit/test_study.py)",
     "hdrjax.study.plot_sweep": "matplotlib figure (tests/fit/test_study.py)",
     "hdrjax.study.SweepResult": "result container of sweep (tests/fit/test_study.py)",

@@ -105,6 +105,16 @@ GENERATORS = {
         ("hdrjax.panorama.fisheye_directions",),
         (-1, 1),
     ),
+    "perspective_directions": (
+        lambda: hp.perspective_directions(3, 4, fov_deg=120.0, yaw_deg=-30.0, roll_deg=10.0),
+        ("hdrjax.panorama.perspective_directions",),
+        (-1, 1),
+    ),
+    "camera_basis": (
+        lambda: hp.camera_basis(30.0, -20.0, 45.0),
+        ("hdrjax.panorama.camera_basis",),
+        (-1, 1),
+    ),
     "glare_kernel": (
         lambda: hv.glare_kernel(hv.View(hfov=30.0).resolve(5, 7)),
         ("hdrjax.vision.glare_kernel",),

@@ -66,8 +66,9 @@ def test_measure_distance_readout_and_region(scene, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "pixel (2, 1): luminance" in out and "hits: 2" in out and "total hits: 8" in out
     assert json.loads(out_json.read_text())["stats"]["pixels"] == 4
-    assert main(argv) == 1  # the region file exists
-    assert "use --overwrite" in capsys.readouterr().err
+    assert main(argv) == 0  # an existing region file is replaced
+    assert main([*argv, "--no-clobber"]) == 2  # unless refused
+    assert "already exists (--no-clobber)" in capsys.readouterr().err
     assert main(["measure", str(scene)]) == 2
     assert main(["measure", str(scene), "--from", "1,1"]) == 2
 
@@ -78,8 +79,10 @@ def test_export_conversions_and_overwrite(scene, tmp_path, capsys):
     assert (tmp_path / "out.position.exr").exists()
     got = hio.read(hdr)
     np.testing.assert_array_equal(got.layers["position"], hio.read(scene).layers["position"])
-    assert main(["export", str(scene), "-o", str(hdr)]) == 1
-    assert "already exists (use --overwrite)" in capsys.readouterr().err
+    assert main(["export", str(scene), "-o", str(hdr)]) == 0  # replaced
+    hdr.unlink()  # the sidecar is still there: written by the library, refused by it too
+    assert main(["export", str(scene), "-o", str(hdr), "--sidecars", "--no-clobber"]) == 2
+    assert ".exr: already exists (--no-clobber)" in capsys.readouterr().err  # a sidecar
     half = tmp_path / "half.exr"
     assert (
         main(["export", str(DATA / "cornell_box.exr"), "-o", str(half), "--pixel-type", "half"])

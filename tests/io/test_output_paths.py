@@ -20,14 +20,14 @@ CASES = {
     "fit": (["fit", "{P}", "-o", "{OUT}", "--target", "mean=0.2"], "x.exr"),
     "fit reference": (["fit", "scene.exr", "-o", "{OUT}", "--target", "reference={P}"], "x.png"),
     "vision": (["vision", "{P}", "-o", "{OUT}", "--scale", "100"], "x.exr"),
-    "export": (["export", "{P}", "-o", "{OUT}", "--overwrite"], "x.exr"),
+    "export": (["export", "{P}", "-o", "{OUT}"], "x.exr"),
     "falsecolor": (["falsecolor", "{P}", "-o", "{OUT}"], "x.png"),
     "falsecolor legend": (["falsecolor", "{P}", "-o", "fc.png", "--legend", "{OUT}"], "x.png"),
     "lights": (["lights", "{P}", "-o", "{OUT}"], "x.png"),
-    "lights json": (["lights", "{P}", "--json", "{OUT}"], "x.json"),
+    "lights json": (["lights", "{P}", "--json-out", "{OUT}"], "x.json"),
     "measure": (["measure", "{P}", "--rect", "0,0,2,2", "--region-out", "{OUT}"], "x.json"),
     "compare": (["compare", "{P}", "-o", "{OUT}", "--methods", "linear"], "x.hdr"),
-    "compare json": (["compare", "{P}", "-o", "r.html", "--json", "{OUT}"], "x.exr"),
+    "compare json": (["compare", "{P}", "-o", "r.html", "--json-out", "{OUT}"], "x.exr"),
     "compare reference": (["compare", "scene.exr", "--reference", "{P}", "-o", "{OUT}"], "x.png"),
     "merge": (["merge", "{P}", "b.png", "-o", "{OUT}"], "x.png"),
     "merge response": (
@@ -35,6 +35,8 @@ CASES = {
         "x.json",
     ),
     "fuse": (["fuse", "a.png", "{P}", "-o", "{OUT}"], "x.png"),
+    "panorama": (["panorama", "{P}", "-o", "{OUT}", "--projection", "cube"], "x.exr"),
+    "histogram": (["histogram", "{P}", "-o", "{OUT}"], "x.png"),
     # batch: the output folder holds the input frame under its output name
     "batch": (["batch", "{P}", "-o", "{OUT}", "--format", "exr", "--no-resume"], "frames/a.exr"),
     "batch folder": (["batch", "{P}", "-o", "{OUT}"], "x.exr"),  # -o names an input file

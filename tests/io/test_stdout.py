@@ -21,6 +21,12 @@ CASES = {
     "vision": (["vision", "{IN}", "-o", "{OUT}", "--scale", "100"], ("pfm",)),
     "falsecolor": (["falsecolor", "{IN}", "-o", "{OUT}"], ("png",)),
     "export": (["export", "{IN}", "-o", "{OUT}"], ("hdr", "pfm", "png")),
+    "panorama": (
+        ["panorama", "{IN}", "-o", "{OUT}", "--projection", "disc"]
+        + ["--input-projection", "polar", "--size", "4"],
+        ("hdr", "pfm"),
+    ),
+    "histogram": (["histogram", "{IN}", "-o", "{OUT}"], ("png",)),
 }
 
 

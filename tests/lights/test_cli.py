@@ -11,7 +11,7 @@ from ._synth import rooitou
 
 def test_lights_overlay_and_json(tmp_path, capsys):
     png, js = tmp_path / "overlay.png", tmp_path / "lights.json"
-    assert main(["lights", str(rooitou()), "-o", str(png), "--json", str(js)]) == 0
+    assert main(["lights", str(rooitou()), "-o", str(png), "--json-out", str(js)]) == 0
     out = capsys.readouterr().out
     assert "1 light(s)" in out and "az  +36.09" in out
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
@@ -25,7 +25,7 @@ def test_lights_overlay_and_json(tmp_path, capsys):
 
 def test_lights_convention_and_median_cut(tmp_path):
     js = tmp_path / "l.json"
-    assert main(["lights", str(rooitou()), "--json", str(js), "--convention", "blender"]) == 0
+    assert main(["lights", str(rooitou()), "--json-out", str(js), "--convention", "blender"]) == 0
     d = json.loads(js.read_text())["lights"][0]["direction"]
     # Blender: centre +X, right -Y, up +Z; the sun is 36° right of centre, 10.5° up
     assert d[0] > 0.75 and d[1] < -0.55 and d[2] == pytest.approx(0.183, abs=0.01)
@@ -38,7 +38,7 @@ def test_lights_convention_and_median_cut(tmp_path):
                 "median-cut",
                 "--n-lights",
                 "8",
-                "--json",
+                "--json-out",
                 str(js),
             ]
         )

@@ -214,7 +214,7 @@ def test_nan_pixels_leave_the_scores_finite(rgb):
 def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
     out, js, sheet = tmp_path / "report.html", tmp_path / "report.json", tmp_path / "s.png"
     argv = ["compare", str(image_file), "--methods", "drago2003,reinhard2002", "-o", str(out)]
-    assert main([*argv, "--json", str(js), "--sheet", str(sheet), "--repeats", "2"]) == 0
+    assert main([*argv, "--json-out", str(js), "--sheet", str(sheet), "--repeats", "2"]) == 0
     text = capsys.readouterr().out
     assert f"wrote: {out}" in text and f"wrote: {js}" in text and f"wrote: {sheet}" in text
     from PIL import Image
@@ -239,11 +239,11 @@ def test_cli_writes_the_report_and_json(image_file, table, tmp_path, capsys):
         (["BAD", "--methods", "reinhard2002", "-o", "OUT"], 1, "bad.hdr"),
         (["IMG", "--methods", "reinhard2002", "-o", "IMG"], 2, "output is the input file"),
         (["IMG", "--methods", "reinhard2002", "-o", "r.png"], 2, "expected an .html file"),
-        (["IMG", "-o", "OUT", "--json", "IMG"], 2, "output is the input file"),
+        (["IMG", "-o", "OUT", "--json-out", "IMG"], 2, "output is the input file"),
         (
-            ["IMG", "-o", "OUT", "--json", "OUT"],
+            ["IMG", "-o", "OUT", "--json-out", "OUT"],
             2,
-            "-o, --json and --sheet must name different files",
+            "-o, --json-out and --sheet must name different files",
         ),
         (["IMG", "-o", "OUT", "--reference", "IMG2"], 1, "no such file"),
         (["IMG", "-o", "OUT", "--sheet", "s.jpg"], 2, "expected a .png file for --sheet"),
@@ -285,7 +285,7 @@ def test_cli_failure_leaves_earlier_outputs_whole(image_file, tmp_path, capsys, 
 
     monkeypatch.setattr(ComparisonTable, "to_html", broken)
     argv = ["compare", str(image_file), "--methods", "exponential", "-o", str(out)]
-    assert main([*argv, "--json", str(js), "--repeats", "1"]) == 1
+    assert main([*argv, "--json-out", str(js), "--repeats", "1"]) == 1
     assert "rendering failed" in capsys.readouterr().err
     assert out.read_text() == "old page" and js.read_text() == "old json"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.html", "r.json"]
@@ -307,7 +307,7 @@ def test_cli_all_lists_every_operator(image_file, table, tmp_path, capsys, monke
 
     monkeypatch.setattr("hdrjax.report._compare._row", row)
     out, js = tmp_path / "all.html", tmp_path / "all.json"
-    argv = ["compare", str(image_file), "--all", "-o", str(out), "--json", str(js)]
+    argv = ["compare", str(image_file), "--all", "-o", str(out), "--json-out", str(js)]
     assert main([*argv, "--repeats", "1"]) == 0
     doc = json.loads(js.read_text())
     compared = {r["method"] for r in doc["rows"]}
