@@ -239,7 +239,10 @@ def run(args: argparse.Namespace) -> int:
             min(0.0, float(np.nanmin(y))) - 0.02, min(max(float(np.nanmax(y)), 1.0), 1.2) + 0.05
         )
         cax.set_ylabel("display luminance $L_d$ (1 = display white)")
-    (cax if op is not None else ax).legend(handles=handles, loc="upper left", fontsize="small")
+    # with a curve: mid-right, below its shoulder; without: wherever the bars leave room
+    (cax if op is not None else ax).legend(
+        handles=handles, loc="center right" if op is not None else "best", fontsize="small"
+    )
     ax.set_title(args.title or img.name)
     try:
         with output_file(args) as path:
