@@ -465,6 +465,11 @@ class AbstractOperator(eqx.Module):
     """Absolute error (display units) of float32 results from rounding alone: two
     evaluations that differ only in the order of operations (compiled against eager, merged
     statistics against the whole image's) agree to this."""
+    frames_in_sequence: ClassVar[bool] = False
+    """Whether a batch of frames is mapped one frame after another (``lax.map``) instead of
+    together (``vmap``): for operators whose measurement iterates a data-dependent number of
+    times (a while loop), where under ``vmap`` every frame iterates as long as the slowest
+    and pays for all frames at each step."""
     only_feeds: ClassVar[dict[str, str]] = {}
     """Parameters whose only use is to estimate another one when that one is unset:
     ``{"L_max": "L_white"}`` says that once ``L_white`` is set, ``L_max`` does not change
@@ -539,6 +544,8 @@ class AbstractOperator(eqx.Module):
             # operator structure and image shape (eager lax.cond would recompile every call)
             return _apply_jit(self, rgb)
         if rgb.ndim > 3:
+            if self.frames_in_sequence:
+                return jax.lax.map(self.__call__, rgb)
             return jax.vmap(self.__call__)(rgb)
         run = lambda p: self._measure(p)._apply(p)  # noqa: E731
         return dispatch(rgb, self.weights_, run, fix=True, stats=self.statistics_settings())

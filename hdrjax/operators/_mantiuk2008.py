@@ -704,6 +704,8 @@ class Mantiuk2008(AbstractOperator):
 
     reference: ClassVar[str] = REFERENCE
     default_fit_params: ClassVar[tuple[str, ...]] = ("contrast_enhancement",)
+    # pfstmo's iteration stops when the curve settles (up to 200 QP solves): frames differ
+    frames_in_sequence: ClassVar[bool] = True
 
     curve: Array | None = parameter(
         None,
