@@ -428,8 +428,7 @@ def _output_needs_unset(op: AbstractOperator) -> bool:
     ``L_white``. Then the fit need not measure them (a pass over the full-resolution
     image; they stay ``None`` in the result, the output is the same). An operator that
     declares nothing is measured."""
-    feeds = type(op).only_feeds
-    return any(n not in feeds or getattr(op, feeds[n]) is None for n in op.unset())
+    return bool(op.unset_needed())
 
 
 # built once per configuration: an equinox Module's construction costs ~0.05 ms a call

@@ -583,6 +583,15 @@ class AbstractOperator(eqx.Module):
             if not f.metadata.get("static", False) and getattr(self, f.name) is None
         )
 
+    def unset_needed(self) -> tuple[str, ...]:
+        """The unset parameters the output still depends on: :meth:`unset` less those that
+        only estimate another parameter that is set (:attr:`only_feeds`; e.g. ``linear``
+        with ``L_max`` set does not need ``ev100`` or the exposure settings)."""
+        feeds = type(self).only_feeds
+        return tuple(
+            n for n in self.unset() if n not in feeds or getattr(self, feeds[n]) is None
+        )
+
     def parameters(self) -> dict[str, Any]:
         """All fields as Python values (floats for scalar parameters), for printing."""
         out = {}
@@ -1134,7 +1143,7 @@ class AbstractLuminanceCurve(AbstractOperator):
 
     def curve(self, L: ArrayLike) -> Array:
         """The luminance curve alone, for plotting or inspection (parameters must be set)."""
-        missing = self.unset()
+        missing = self.unset_needed()
         if missing:
             raise ValueError(
                 f"{self.name}: measure an image first; unset parameters: {', '.join(missing)}"

@@ -35,6 +35,20 @@ def test_exposure_saturates_at_iso12232_luminance(x64):
     )
 
 
+@pytest.mark.parametrize(
+    "kw", [{}, {"ev100": 3.0}, {"exposure_time": 0.01, "f_number": 4.0, "iso": 100.0}]
+)
+def test_measured_linear_has_a_curve(kw):
+    """Once measured, the curve is there whichever way L_max was given: the exposure
+    settings left unset only derive L_max (they once made ``curve`` refuse, and with it
+    ``hdrjax.plot.tone_curve``)."""
+    op = Linear(**kw).measure(natural())
+    L = np.array([0.0, 1.0, 10.0], np.float32)
+    np.testing.assert_allclose(np.asarray(op.curve(L)), L / float(op.L_max), rtol=1e-6)
+    with pytest.raises(ValueError, match="unset parameters: L_max"):
+        Linear().curve(L)
+
+
 def test_linear_maps_L_max_to_white(x64):
     rgb = natural(dtype=np.float64)
     out = np.asarray(hdrjax.tonemap(rgb, "linear", L_max=7.0))
