@@ -588,9 +588,7 @@ class AbstractOperator(eqx.Module):
         only estimate another parameter that is set (:attr:`only_feeds`; e.g. ``linear``
         with ``L_max`` set does not need ``ev100`` or the exposure settings)."""
         feeds = type(self).only_feeds
-        return tuple(
-            n for n in self.unset() if n not in feeds or getattr(self, feeds[n]) is None
-        )
+        return tuple(n for n in self.unset() if n not in feeds or getattr(self, feeds[n]) is None)
 
     def parameters(self) -> dict[str, Any]:
         """All fields as Python values (floats for scalar parameters), for printing."""

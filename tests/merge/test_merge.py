@@ -289,8 +289,13 @@ def test_kernel_gradients_match_finite_differences():
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((100, 3)), np.full((256, 3), np.nan), np.full((256, 3), np.inf),
-     np.full((256, 3), -np.inf), np.zeros((256, 2))],
+    [
+        np.zeros((100, 3)),
+        np.full((256, 3), np.nan),
+        np.full((256, 3), np.inf),
+        np.full((256, 3), -np.inf),
+        np.zeros((256, 2)),
+    ],
     ids=["levels", "nan", "+inf", "no-finite", "channels"],
 )
 def test_one_response_check_for_merge_ghosts_and_saving(bad, tmp_path):
