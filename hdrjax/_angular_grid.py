@@ -25,12 +25,10 @@ def _dirs(az_deg: np.ndarray, el_deg: np.ndarray) -> np.ndarray:
 
 
 def _basis(yaw: float, pitch: float, roll: float) -> np.ndarray:
-    """Rows: the camera's right, up and forward vectors (hdrjax.panorama.camera_basis)."""
-    y, p, r = (math.radians(v) for v in (yaw, pitch, roll))
-    f = np.array([math.cos(p) * math.sin(y), math.sin(p), -math.cos(p) * math.cos(y)])
-    r0 = np.array([math.cos(y), 0.0, math.sin(y)])
-    u0 = np.cross(r0, f)
-    return np.stack([math.cos(r) * r0 - math.sin(r) * u0, math.sin(r) * r0 + math.cos(r) * u0, f])
+    """Rows: the camera's right, up and forward vectors, as the views are sampled."""
+    from .panorama import camera_basis
+
+    return np.asarray(camera_basis(yaw, pitch, roll), np.float64)
 
 
 def project(
