@@ -1,5 +1,6 @@
 """Long library calls show their progress where a person watches — tiles
-(:func:`hdrjax.tile.apply`), fits (:func:`hdrjax.fit.fit`, the solver's steps) and sweeps
+(:func:`hdrjax.tile.apply`), fits (:func:`hdrjax.fit.fit` and :func:`~hdrjax.fit.fit_sequence`,
+the solver's steps; :func:`~hdrjax.fit.fit_batch`, the frames) and sweeps
 (:func:`hdrjax.study.sweep`, the grid points) — and never in a pipe or a log.
 
 That :func:`hdrjax._progress.interactive` is true in a Jupyter kernel and that tqdm draws
@@ -42,6 +43,21 @@ def test_fit_counts_its_steps(watched, capsys):
     bar = _last_bar(capsys.readouterr().err)
     assert bar.startswith(f"fit linear: {int(res.steps)}step"), bar
     assert bool(res.success)
+
+
+def test_fit_batch_counts_frames_and_fit_sequence_its_steps(watched, capsys):
+    frames = jnp.stack([IMAGE, 2.0 * IMAGE, 0.5 * IMAGE])
+    target = ht.MeanLuminance(0.3)
+    res = hf.fit_batch("linear", frames, target, params="L_max", max_size=None)
+    bar = _last_bar(capsys.readouterr().err)
+    assert bar.startswith("fit_batch linear: 100%") and " 3/3 " in bar, bar
+    assert bool(np.all(res.success))
+    seq = hf.fit_sequence("linear", frames, target, params="L_max", max_size=None)
+    bar = _last_bar(capsys.readouterr().err)
+    assert bar.startswith(f"fit_sequence linear: {int(seq.steps[0])}step"), bar
+    quiet = hf.fit_batch("linear", frames, target, params="L_max", max_size=None, progress=False)
+    np.testing.assert_array_equal(np.asarray(quiet.params["L_max"]), res.params["L_max"])
+    assert capsys.readouterr().err == ""
 
 
 def test_sweep_counts_its_points(watched, capsys):
