@@ -10,7 +10,10 @@ Every implementation reads the files, tone-maps, encodes and writes every frame:
   overlapped with the computation; ``hdrjax-vmap`` — the same with ``vectorize="vmap"``;
 * ``hdrjax-dask-1w`` / ``hdrjax-dask-2w`` — the same work on a ``dask.distributed``
   LocalCluster with 1 and 2 worker processes (one thread each; quick mode: 2 only), started
-  and warmed up (compiled) before the timing; the start-up time is reported in ``startup_s``;
+  and warmed up (compiled) before the timing; the start-up time is reported in ``startup_s``.
+  Each worker runs on its own cores, as ``batch.run(workers=N)`` pins them
+  (hdrjax/batch/_cores.py); ``hdrjax-dask-2w-shared-cores`` (full mode) is 2 workers left to
+  share every core, the difference that pinning makes;
 * ``one-at-a-time loop`` — the plain hdrjax loop: ``hdrjax.io.read``, ``hdrjax.tonemap``,
   ``display.encode`` + ``quantize``, ``io.write_display`` per frame;
 * ``numpy+opencv`` — the peer script: ``cv2.imread`` of the .hdr, the same operator in NumPy
@@ -194,7 +197,13 @@ def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = Fal
         if not skip_dask:
             from distributed import Client, LocalCluster
 
-            for workers in (2,) if quick else (1, 2):
+            from hdrjax.batch._cores import pin_workers
+
+            # the cluster batch.run(workers=N) makes (each worker on its own cores), and for
+            # 2 workers the same without pinning: XLA processes sharing every core
+            variants = [(w, True) for w in ((2,) if quick else (1, 2))]
+            variants += [] if quick else [(2, False)]
+            for workers, pinned in variants:
                 t0 = time.perf_counter()
                 cluster = LocalCluster(
                     n_workers=workers,
@@ -205,6 +214,8 @@ def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = Fal
                     silence_logs=logging.ERROR,
                 )
                 client = Client(cluster)
+                if pinned:
+                    pin_workers(client, workers)
                 startup = time.perf_counter() - t0
                 try:
                     # warm-up: every worker compiles the pipeline once
@@ -238,11 +249,12 @@ def run(quick: bool = False, *, frames: int | None = None, skip_dask: bool = Fal
                     H.record(
                         BENCH,
                         case,
-                        f"hdrjax-dask-{workers}w",
+                        f"hdrjax-dask-{workers}w" + ("" if pinned else "-shared-cores"),
                         timing=t,
                         frames=n,
                         frames_per_s=n / t["median_s"],
                         workers=workers,
+                        pinned=pinned,
                         startup_s=startup,
                         cores=os.cpu_count(),
                     )

@@ -5,6 +5,10 @@ import os
 from pathlib import Path
 
 
+CORES = tuple(sorted(os.sched_getaffinity(0))) if hasattr(os, "sched_getaffinity") else ()
+"""The cores this test run may use (before a worker is pinned to one of them)."""
+
+
 def _pin_test_worker() -> None:
     """One core per pytest-xdist worker when there are as many workers as cores: XLA:CPU
     processes whose thread pools share cores slow each other down many times over (two
@@ -14,12 +18,31 @@ def _pin_test_worker() -> None:
     count = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
     if not (worker.startswith("gw") and hasattr(os, "sched_setaffinity")):
         return
-    cores = sorted(os.sched_getaffinity(0))
+    cores = CORES
     if 1 < count <= len(cores):
         os.sched_setaffinity(0, {cores[int(worker[2:]) % len(cores)]})
 
 
 _pin_test_worker()
+
+
+def _share_compiled_programs() -> None:
+    """One persistent XLA cache for the whole run (its workers and the command-line
+    subprocesses of its tests), in a temporary folder the first process makes: a program
+    compiled by one test file is read back by the next that needs it instead of compiled
+    again (a quarter of the programs a full run asks for), and nothing outlives the run."""
+    if "JAX_COMPILATION_CACHE_DIR" in os.environ:  # set by the user, or by the controller
+        return
+    import tempfile
+
+    os.environ["JAX_COMPILATION_CACHE_DIR"] = tempfile.mkdtemp(prefix="hdrjax-test-xla-")
+    os.environ["HDRJAX_TEST_OWN_CACHE"] = os.environ["JAX_COMPILATION_CACHE_DIR"]
+    # every program: the suite's are small and compiled once each
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")
+
+
+_share_compiled_programs()
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
@@ -78,3 +101,12 @@ def _release_compiled_programs():
     (keeping them until a worker held 2 GiB showed no gain in one full run)."""
     yield
     jax.clear_caches()
+
+
+def pytest_unconfigure(config):
+    """The run's XLA cache goes with the process that made it (the controller)."""
+    own = os.environ.get("HDRJAX_TEST_OWN_CACHE")
+    if own and not os.environ.get("PYTEST_XDIST_WORKER"):
+        import shutil
+
+        shutil.rmtree(own, ignore_errors=True)

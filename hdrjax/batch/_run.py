@@ -419,7 +419,11 @@ def _client(workers: int | None, scheduler: Any):
         silence_logs=logging.ERROR,
         env=env,
     )
-    return Client(cluster), cluster, True
+    client = Client(cluster)
+    from ._cores import pin_workers
+
+    pin_workers(client, int(workers or 1))  # one XLA thread pool per core group
+    return client, cluster, True
 
 
 def _chunks(items: list, size: int) -> list[list]:

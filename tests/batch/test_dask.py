@@ -133,3 +133,37 @@ def test_killed_worker_loses_no_frame(frames, reference, cluster, tmp_path):
     assert len(s.done) == N and not s.failed
     assert _bytes(out) == _bytes(reference / "per")
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temp file left
+
+
+def test_core_groups_are_disjoint_while_there_are_enough_cores():
+    from hdrjax.batch._cores import core_groups
+
+    assert core_groups([0, 1, 2, 3], 2) == [[0, 1], [2, 3]]
+    assert core_groups([0, 1, 2, 3, 4], 2) == [[0, 1], [2, 3]]
+    assert core_groups([4, 7], 2) == [[4], [7]]
+    assert core_groups([0, 1], 3) == [[0], [1], [0]]
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity here")
+def test_local_workers_each_run_on_their_own_cores():
+    """``batch.run(workers=N)``'s cluster pins each worker process to its own cores (XLA
+    processes sharing cores slow each other many times over: hdrjax/batch/_cores.py)."""
+    from hdrjax.batch._run import _client
+
+    from ..conftest import CORES
+
+    mine, cores = os.sched_getaffinity(0), list(CORES)
+    if len(cores) < 2:
+        pytest.skip("one core: nothing to split")
+    os.sched_setaffinity(0, cores)  # as a user's process (the test worker has one core)
+    try:
+        client, cluster, _ = _client(2, None)
+    finally:
+        os.sched_setaffinity(0, mine)
+    try:
+        got = sorted(sorted(s) for s in client.run(lambda: os.sched_getaffinity(0)).values())
+    finally:
+        client.close()
+        cluster.close()
+    half = len(cores) // 2
+    assert got == [cores[:half], cores[half : 2 * half]]
