@@ -4,7 +4,6 @@ import contextlib
 import os
 from pathlib import Path
 
-
 CORES = tuple(sorted(os.sched_getaffinity(0))) if hasattr(os, "sched_getaffinity") else ()
 """The cores this test run may use (before a worker is pinned to one of them)."""
 

@@ -33,6 +33,13 @@ class FrameError(ValueError):
     """A frame that cannot be processed (unreadable file, NaN pixels, failed write)."""
 
 
+def failure(err: BaseException) -> str:
+    """An exception as one line for a failed frame: its message, or its type when it has
+    none (a bare ``AssertionError`` once printed "processing failed: " and nothing else)."""
+    text = " ".join(str(err).split())
+    return text or type(err).__name__
+
+
 def read_frame(
     path: str | os.PathLike, *, allow_nan: bool = False
 ) -> tuple[np.ndarray, tuple[float, ...] | None]:
@@ -267,7 +274,7 @@ def render_task(
                 out = out if isinstance(out, list) else np.asarray(out)
             except Exception as e:  # a failed batch fails its frames, not the run
                 for m in part:
-                    result[m[0][0]] = f"{m[0][1]}: processing failed: {e}"
+                    result[m[0][0]] = f"{m[0][1]}: processing failed: {failure(e)}"
                 continue
             with ThreadPoolExecutor(_IO_THREADS) as ex:
                 futures = [

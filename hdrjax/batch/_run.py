@@ -51,6 +51,7 @@ from ._frames import (
     FrameError,
     dispatch_render,
     dispatch_sequence,
+    failure,
     group_key,
     measure_frames,
     measure_task,
@@ -258,7 +259,7 @@ def _write(pipeline: Pipeline, col: _Collector, e: _Entry, hb: _HostBatch, i: in
     except FrameError as err:
         col.fail(e, str(err))
     except Exception as err:  # the computation itself failed: every frame of it fails
-        col.fail(e, f"{e.path}: processing failed: {err}")
+        col.fail(e, f"{e.path}: processing failed: {failure(err)}")
     else:
         col.ok(e)
 
@@ -287,7 +288,7 @@ def _render_local(
                 out = dispatch_render(pipeline, [m[1] for m in members], key, vals, batch_size)
             except Exception as err:
                 for m in members:
-                    col.fail(m[0], f"{m[0].path}: processing failed: {err}")
+                    col.fail(m[0], f"{m[0].path}: processing failed: {failure(err)}")
                 return
             hb = _HostBatch(out)
             in_flight.append([wx.submit(write, m[0], hb, i) for i, m in enumerate(members)])
@@ -347,7 +348,9 @@ def _render_in_order(
                 )
             except Exception as err:
                 for e, _ in members:
-                    col.fail(e, f"{e.path}: processing failed: {err}", count=e.index not in skip)
+                    col.fail(
+                        e, f"{e.path}: processing failed: {failure(err)}", count=e.index not in skip
+                    )
                 return
             hb = _HostBatch(out)
             for i, (e, _) in enumerate(members):

@@ -9,17 +9,17 @@ frame read from a file, an image whose statistics were just measured) use
 from jaxtyping import Array, Float
 
 from .._colour import luminance
-from ._base import AbstractOperator, Prepared, statistics_of
+from ._base import AbstractOperator, Prepared
 
 
 def clean_operator_call(op: AbstractOperator, rgb: Float[Array, "H W 3"]) -> Float[Array, "H W 3"]:
     """``op(rgb)`` for one image known to be finite: the operators' fast path, without the
     data-dependent check that chooses it (same result as ``op(rgb)`` on such an image):
-    ``op.bind`` of the image's statistics (:meth:`~AbstractOperator.statistics_settings`),
-    then the curve."""
+    the operator measured on the image (``op.bind`` of its statistics, or the operator's own
+    measurement where it has one, as mantiuk2008's curve), then mapped."""
     L = luminance(rgb, op.weights_)
     p = Prepared(rgb, L, L, clean=True)
-    return op.bind(statistics_of(p, op.statistics_settings()))._apply(p)
+    return op._measure(p)._apply(p)
 
 
 __all__ = ["clean_operator_call"]

@@ -313,3 +313,30 @@ def test_vmap_and_map_batches_agree(seq, tmp_path):
         outs[mode] = np.stack([read_png(tmp_path / mode / (p.stem + ".png")) for p in seq[:4]])
     assert np.abs(outs["map"] - outs["vmap"]).max() <= 1
     assert np.mean(outs["map"] != outs["vmap"]) < 1e-3
+
+
+@pytest.mark.parametrize("method", ["mantiuk2008", "reinhard2005"])
+def test_operators_with_their_own_measurement_batch_as_they_map(method, seq, tmp_path):
+    """Operators that measure more than summary statistics (mantiuk2008's curve,
+    reinhard2005's adaptation) render in a batch as by themselves: every mantiuk2008 frame
+    once failed with a message-less "processing failed: "."""
+    import hdrjax
+
+    s = batch.run(seq[:2], batch.Pipeline(method), tmp_path, batch_size=2, progress=False)
+    assert len(s.done) == 2 and not s.failed
+    for p in seq[:2]:
+        got = decode_png((tmp_path / (p.stem + ".png")).read_bytes())[0].astype(np.float64)
+        ref = np.asarray(
+            hdrjax.display.quantize(
+                hdrjax.display.encode(hdrjax.tonemap(hio.read(p).rgb(), method)), 8
+            ),
+            np.float64,
+        )
+        assert np.abs(got - ref).max() <= 1, p.name
+
+
+def test_a_failed_frame_says_what_failed():
+    from hdrjax.batch._frames import failure
+
+    assert failure(AssertionError()) == "AssertionError"
+    assert failure(ValueError("bad\n  value")) == "bad value"
