@@ -153,6 +153,16 @@ def call(
     return f"{type(x).__name__}({body})"
 
 
+def fields_repr(self: Any) -> str:
+    """A ``__repr__`` for a Module or dataclass: ``Name(field=value, …)`` (:func:`call`)."""
+    return call(self)
+
+
+def fields_html(self: Any) -> str:
+    """A ``_repr_html_`` for a Module or dataclass: its name over a table of its fields."""
+    return view(type(self).__name__, table([(k, value(v)) for k, v in fields(self)]))
+
+
 def table(rows: Iterable[Iterable[Any]], header: Iterable[str] | None = None) -> str:
     """An HTML table of text cells (escaped); the first cell of each row is a heading."""
     out = ["<table>"]

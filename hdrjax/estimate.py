@@ -28,7 +28,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from . import _check
+from . import _check, _repr
 from ._colour import REC709_WEIGHTS
 from ._stats import DEFAULT_BINS, DEFAULT_DELTA
 from .display._desaturate import PERCENT_ABOVE, THRESHOLD_FACTOR, threshold_and_l90
@@ -45,6 +45,9 @@ class Estimate(eqx.Module):
         statistics: the image statistics (and intermediate terms) it used, by name.
         name: which estimate (``"jgt_key"``, ``"jgt_white"`` ...).
     """
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     value: Float[Array, ""]
     statistics: dict[str, Array]

@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, UInt
 
-from .. import _check
+from .. import _check, _repr
 from ..io._display import DEFAULT_COMPRESSION
 from ..operators._base import AbstractOperator, as_float_image, make_operator
 from ..operators._call import clean_operator_call
@@ -165,6 +165,9 @@ class Pipeline(eqx.Module):
     >>> p.extension
     '.png'
     """
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     operator: AbstractOperator = eqx.field(converter=_as_operator)
     steps: tuple[Step, ...] = eqx.field(static=True, default=(), converter=_as_steps)

@@ -50,7 +50,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
+from .. import _check, _repr
 from .._colour import channel_min, luminance
 from .._scale import inverse_pow2
 from .._stats import DEFAULT_BINS, Statistics, percentile, summarise, summarise_histogram
@@ -334,6 +334,9 @@ def _desaturate_manual(x, T, weights):
 class DesaturateHighlights(eqx.Module):
     """:func:`desaturate_highlights` as a Module (``threshold=None``: automatic), so that it
     composes with operators under ``jit``/``vmap``/``grad``; ``threshold`` is a parameter."""
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     threshold: Array | None = None
     weights: tuple[float, ...] | None = eqx.field(static=True, default=None)

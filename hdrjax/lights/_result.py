@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from .. import _repr
 from ._geometry import (
     Convention,
     azimuth_elevation,
@@ -315,6 +316,9 @@ class MedianCutLights(eqx.Module):
         region: ``(x0, y0, x1, y1)`` half-open pixel box at the working resolution.
         input_shape: ``(H, W)`` of the input map (static).
     """
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     direction: Float[Array, "*batch N 3"]
     irradiance: Float[Array, "*batch N 3"]

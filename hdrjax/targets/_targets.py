@@ -38,7 +38,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
+from .. import _check, _repr
 from .._colour import REC709_WEIGHTS, apply_matrix, luminance
 from .._stats import percentile_by_selection, selection_range
 from ..display import srgb_encode
@@ -93,6 +93,9 @@ class AbstractTarget(eqx.Module):
     ``weight · (1 − metric)`` of a quality metric that is maximised, not met: their loss
     keeps a positive minimum (see :func:`hdrjax.fit.fit`'s default solver).
     """
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     takes_source: ClassVar[bool] = False
     maximises: ClassVar[bool] = False

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .. import _check
+from .. import _check, _repr
 from .._colour import luminance
 from .._photometry import LMIN, check_rgb, chroma_key, weights_of
 from ..operators._base import AbstractLuminanceCurve, AbstractOperator, make_operator
@@ -137,6 +137,9 @@ class HumanVision(eqx.Module):
         display_max, display_range: the display, for ``contrast``.
         chromaticities: the image's primaries (``None``: Rec.709/D65).
     """
+
+    __repr__ = _repr.fields_repr
+    _repr_html_ = _repr.fields_html
 
     effects: tuple[str, ...] = eqx.field(static=True)
     view: ResolvedView = eqx.field(static=True)

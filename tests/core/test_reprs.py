@@ -261,3 +261,32 @@ def test_scene_report_shows_measurements_without_computing_a_deferred_percentile
     page = _html_text(report._repr_html_())
     assert "3.04 cd/m²" in page and "float64 (2, 3), all 9.5 cd/m²" in page
     assert "L_5% 3.04 cd/m²" in repr(report)  # known now
+
+
+def test_pipelines_targets_vision_lights_estimates_and_desaturation_show_values():
+    """The remaining Modules users print in notebooks show numbers and names, not
+    equinox's ``f32[]`` shapes, and have an HTML table."""
+    import hdrjax.estimate as he
+    import hdrjax.lights as hl
+    import hdrjax.targets as ht
+    from hdrjax import batch
+    from hdrjax.display import DesaturateHighlights
+    from hdrjax.vision import HumanVision
+
+    x = np.random.default_rng(0).lognormal(0.0, 2.0, (16, 32, 3)).astype(np.float32)
+    objects = {
+        "MeanLuminance(value=0.3": ht.MeanLuminance(0.3),
+        "Percentiles(q=[0.5, 0.99], value=[0.2, 0.9]": ht.Percentiles((0.5, 0.99), (0.2, 0.9)),
+        "Pipeline(operator=Reinhard2002(key=None": batch.Pipeline("reinhard2002"),
+        "DesaturateHighlights(threshold=0.8": DesaturateHighlights(threshold=0.8),
+        "HumanVision(effects=(": HumanVision.build((16, 32), 40.0, ("glare",)),
+        "MedianCutLights(": hl.median_cut(x, n_lights=4),
+        "Estimate(value=": he.jgt_key(x),
+    }
+    for head, obj in objects.items():
+        text = repr(obj)
+        assert text.startswith(head), text
+        assert "f32[" not in text and "\n" not in text, text
+        page = obj._repr_html_()
+        assert "<table>" in page and type(obj).__name__ in page, type(obj).__name__
+    assert "value=0.3" in repr(ht.MeanLuminance(0.3))
