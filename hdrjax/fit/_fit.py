@@ -545,6 +545,18 @@ _ARGS_DOC = """
 """
 
 
+def _watched(jitted: Callable, args: tuple, progress: bool, image: Any, **bar: Any) -> Any:
+    """``jitted(*args, ticks)`` with :func:`~hdrjax._progress.compiled_progress`'s bar
+    (``bar``: its total, unit and description) where a person watches and ``image`` is
+    not traced by an enclosing ``jit``."""
+    show = progress and not isinstance(image, jax.core.Tracer)
+    with compiled_progress(show, **bar) as ticks:
+        res = jitted(*args, ticks)
+        if ticks:
+            wait_ready(res)
+    return res
+
+
 def fit(
     operator: AbstractOperator | str,
     image: Float[ArrayLike, "H W 3"],
@@ -585,14 +597,8 @@ def fit(
     image = as_float_image(image, "image")
     if image.ndim != 3:
         raise ValueError(f"image: expected (H, W, 3), got {image.shape}; use fit_batch")
-    show = progress and not isinstance(image, jax.core.Tracer)
-    with compiled_progress(show, unit="step", desc=f"fit {op.name}") as ticks:
-        res = _fit_jit(
-            prob, op, image, target, solver, int(max_steps), max_size, bool(throw), ticks
-        )
-        if ticks:
-            wait_ready(res)
-    return res
+    args = (prob, op, image, target, solver, int(max_steps), max_size, bool(throw))
+    return _watched(_fit_jit, args, progress, image, unit="step", desc=f"fit {op.name}")
 
 
 fit.__doc__ = fit.__doc__.replace(  # type: ignore[union-attr]
@@ -640,25 +646,12 @@ def fit_batch(
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
     if vectorize is None:
         vectorize = jax.default_backend() != "cpu"
-    show = progress and not isinstance(frames, jax.core.Tracer)
+    args = (prob, op, frames, target, solver, int(max_steps), max_size, bool(throw))
+    args += (bool(batch_target), bool(vectorize))
     desc = f"fit_batch {op.name}"
-    with compiled_progress(show, total=frames.shape[0], unit="frame", desc=desc) as ticks:
-        res = _fit_batch_jit(
-            prob,
-            op,
-            frames,
-            target,
-            solver,
-            int(max_steps),
-            max_size,
-            bool(throw),
-            bool(batch_target),
-            bool(vectorize),
-            ticks,
-        )
-        if ticks:
-            wait_ready(res)
-    return res
+    return _watched(
+        _fit_batch_jit, args, progress, frames, total=frames.shape[0], unit="frame", desc=desc
+    )
 
 
 fit_batch.__doc__ = fit_batch.__doc__.replace(  # type: ignore[union-attr]
@@ -707,23 +700,10 @@ def fit_sequence(
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
     if not float(smoothness) >= 0:
         raise ValueError(f"smoothness: expected >= 0, got {smoothness}")
-    show = progress and not isinstance(frames, jax.core.Tracer)
-    with compiled_progress(show, unit="step", desc=f"fit_sequence {op.name}") as ticks:
-        res = _fit_sequence_jit(
-            prob,
-            op,
-            frames,
-            target,
-            solver,
-            int(max_steps),
-            max_size,
-            bool(throw),
-            jnp.asarray(smoothness),
-            ticks,
-        )
-        if ticks:
-            wait_ready(res)
-    return res
+    args = (prob, op, frames, target, solver, int(max_steps), max_size, bool(throw))
+    args += (jnp.asarray(smoothness),)
+    desc = f"fit_sequence {op.name}"
+    return _watched(_fit_sequence_jit, args, progress, frames, unit="step", desc=desc)
 
 
 fit_sequence.__doc__ = fit_sequence.__doc__.replace(  # type: ignore[union-attr]
