@@ -361,7 +361,7 @@ def _decide(rgb: Array, weights: tuple[float, float, float], stats: Any):
 
 
 class _Branch(threading.local):
-    """Set by :func:`_apply_branch_jit` while it traces (in this thread): the branch
+    """Set by :func:`_branch_jit` while it traces (in this thread): the branch
     :func:`dispatch` takes (``True``: clean) and the statistics measured for it, decided by
     a separate compiled pass."""
 
@@ -420,12 +420,24 @@ def _decide_jit(rgb: Array, weights: tuple[float, float, float], stats: Any):
 
 
 @eqx.filter_jit
-def _apply_branch_jit(op: "AbstractOperator", rgb: Array, st: Any, take_clean: bool) -> Array:
+def _branch_jit(op: "AbstractOperator", rgb: Array, st: Any, take_clean: bool, measure: bool):
+    """``op.measure(rgb)`` or ``op(rgb)`` compiled with only the branch ``take_clean``."""
     _BRANCH.taken.append((take_clean, st))
     try:
-        return op(rgb)
+        return op.measure(rgb) if measure else op(rgb)
     finally:
         _BRANCH.taken.clear()
+
+
+def _decided(op: "AbstractOperator", rgb: Array, measure: bool) -> Any:
+    """:func:`_branch_jit` of the branch that :func:`_decide_jit` chooses for ``rgb``."""
+    finite, st = _decide_jit(rgb, op.weights_, op.statistics_settings())
+    take_clean = bool(finite)
+    return _branch_jit(op, rgb, st if take_clean else None, take_clean, measure)
+
+
+def _decides_first(rgb: Array) -> bool:
+    return rgb.ndim == 3 and rgb.shape[0] * rgb.shape[1] <= DECIDE_FIRST_PIXELS
 
 
 def finish(p: Prepared, out: Array) -> Array:
@@ -991,11 +1003,8 @@ def _apply_jit(op: AbstractOperator, rgb: Array) -> Array:
     batches and operators with a call of their own compile the whole function."""
     if traced(op, rgb):
         return op(rgb)
-    small = rgb.ndim == 3 and rgb.shape[0] * rgb.shape[1] <= DECIDE_FIRST_PIXELS
-    if small and type(op).__call__ is AbstractOperator.__call__:
-        finite, st = _decide_jit(rgb, op.weights_, op.statistics_settings())
-        take_clean = bool(finite)
-        return _apply_branch_jit(op, rgb, st if take_clean else None, take_clean)
+    if _decides_first(rgb) and type(op).__call__ is AbstractOperator.__call__:
+        return _decided(op, rgb, measure=False)
     return _apply_whole_jit(op, rgb)
 
 
@@ -1004,8 +1013,18 @@ def _apply_whole_jit(op: AbstractOperator, rgb: Array) -> Array:
     return op(rgb)
 
 
-@eqx.filter_jit
 def _measure_jit(op: AbstractOperator, rgb: Array) -> AbstractOperator:
+    """``op.measure(rgb)`` compiled, called eagerly; as :func:`_apply_jit`, an image of up
+    to :data:`DECIDE_FIRST_PIXELS` compiles only the branch it takes."""
+    if traced(op, rgb):
+        return op.measure(rgb)
+    if _decides_first(rgb) and type(op).measure is AbstractOperator.measure and op.unset():
+        return _decided(op, rgb, measure=True)
+    return _measure_whole_jit(op, rgb)
+
+
+@eqx.filter_jit
+def _measure_whole_jit(op: AbstractOperator, rgb: Array) -> AbstractOperator:
     return op.measure(rgb)
 
 

@@ -2,6 +2,7 @@
 hdrjax/operators/_base.py, ``dispatch`` and ``DECIDE_FIRST_PIXELS``) and maps exactly as
 the traced function, which compiles both."""
 
+import equinox as eqx
 import jax
 import numpy as np
 import pytest
@@ -48,3 +49,24 @@ def test_large_images_run_the_whole_function(monkeypatch):
     calls.clear()
     np.asarray(op(natural((5, 9))))  # 45 pixels
     assert not calls
+
+
+@pytest.mark.parametrize("name", ["reinhard2002", "mantiuk2008"])
+def test_eager_measure_traces_only_the_branch_taken(name, monkeypatch):
+    traced = []
+    prepare = _base.prepare
+    monkeypatch.setattr(_base, "prepare", lambda *a: traced.append(1) or prepare(*a))
+    op = make(name)
+    clean = natural((11, 7))
+    measured = op.measure(clean)
+    assert not traced, "measuring a clean image compiled the masked path"
+    bad = clean.copy()
+    bad[1, 1] = np.nan
+    measured_bad = op.measure(bad)
+    assert traced
+    both = eqx.filter_jit(lambda o, v: o.measure(v))  # traced: both branches
+    for got, img in ((measured, clean), (measured_bad, bad)):
+        ref = both(op, img)
+        for (k, a), (_, b) in zip(got.parameters().items(), ref.parameters().items(), strict=True):
+            if isinstance(a, float):
+                np.testing.assert_allclose(a, b, rtol=1e-5, err_msg=f"{name}/{k}")
