@@ -29,6 +29,7 @@ from ._common import (
     add_no_clobber_argument,
     refuse_clobbering,
 )
+from ._interrupt import claim_report, interrupted_line, prompt_interrupt
 
 __all__ = ["CLIError", "DataError", "UsageError", "build_parser", "load_plugins", "main"]
 
@@ -162,15 +163,19 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if getattr(args, "uses_jax", True):  # not for `operators`, which compiles nothing
         _enable_compilation_cache()
-    if getattr(args, "output", None) == "-":
-        # the image goes to standard output: everything printed goes to standard error
-        args.stdout = sys.stdout.buffer
-        with contextlib.redirect_stdout(sys.stderr):
-            code = _run(args)
-    else:
-        code = _run(args)
     cluster = getattr(args, "workers", None) or getattr(args, "scheduler", None)
-    if code == 130 and argv is None and not cluster:
+    # the command line itself (not ``main([...])`` in a program, nor a Dask cluster's
+    # client, whose workers the normal exit shuts down): Ctrl-C ends it within a second
+    prompt = argv is None and not cluster
+    with prompt_interrupt(args.command) if prompt else contextlib.nullcontext():
+        if getattr(args, "output", None) == "-":
+            # the image goes to standard output: everything printed goes to standard error
+            args.stdout = sys.stdout.buffer
+            with contextlib.redirect_stdout(sys.stderr):
+                code = _run(args)
+        else:
+            code = _run(args)
+    if code == 130 and prompt:
         _leave_now(code)
     return code
 
@@ -198,9 +203,9 @@ def _run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         # Ctrl-C: one line (on a new one where a progress bar was drawn), status 128 + SIGINT;
         # outputs are written by renaming a finished temporary file, so none is left half
-        with contextlib.suppress(OSError, ValueError):
-            newline = "\n" if sys.stderr.isatty() else ""
-            print(f"{newline}hdrjax {args.command}: interrupted", file=sys.stderr)
+        if claim_report():
+            with contextlib.suppress(OSError, ValueError):
+                print(interrupted_line(args.command), file=sys.stderr)
         return 130
     except BrokenPipeError:
         # the reader went away (``hdrjax info x.exr | head``): stop quietly, and point

@@ -127,6 +127,18 @@ def file_identity(path: str | os.PathLike) -> tuple:
     return ("inode", st.st_dev, st.st_ino)
 
 
+_LIVE: set[Path] = set()
+"""The temporary files :func:`atomic_path` is writing now (the command line removes them
+when Ctrl-C ends the process while its main thread is blocked: :mod:`hdrjax.cli._interrupt`)."""
+
+
+def remove_live_temporaries() -> None:
+    """Remove the temporary files of :func:`atomic_path` still being written."""
+    for tmp in list(_LIVE):
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[Path]:
     """Yield a temporary path next to ``path``; rename it onto ``path`` on success.
@@ -149,6 +161,7 @@ def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[
     fd, tmp_name = tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=folder)
     os.close(fd)
     tmp = Path(tmp_name)
+    _LIVE.add(tmp)
     try:
         yield tmp
         if not tmp.exists() or tmp.stat().st_size == 0:
@@ -163,6 +176,8 @@ def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+    finally:
+        _LIVE.discard(tmp)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes, *, overwrite: bool = True) -> Path:

@@ -80,3 +80,56 @@ def test_filter_stops_within_a_second_of_ctrl_c(tmp_path):
     assert took < BOUND_S, f"ended {took:.2f} s after SIGINT"
     assert err.strip().endswith(b"hdrjax filter: interrupted"), err
     assert sorted(os.listdir(tmp_path)) == ["big.pfm"]  # no output, no temporary file
+
+
+# the filter command with its tiles replaced by a call that stays in C for minutes (as XLA
+# does while it compiles for a new size, 1-5 s) inside a temporary output file
+BLOCKED = """
+import hashlib, signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
+import hdrjax.tile
+from hdrjax.io import atomic_path
+
+def blocked(step, image, **kw):
+    with atomic_path("partial.pfm") as tmp:
+        tmp.write_bytes(b"half")
+        print("blocked", flush=True)
+        hashlib.pbkdf2_hmac("sha256", b"key", b"salt", 10**9)  # releases the GIL
+    raise AssertionError("not interrupted")
+
+hdrjax.tile.apply = blocked
+from hdrjax.cli import main
+sys.exit(main())
+"""
+
+
+def test_ctrl_c_ends_a_command_blocked_outside_python(tmp_path):
+    """Ctrl-C while the main thread is inside C (XLA compiling the first tile): the
+    process still ends within a second, status 130, one line, its temporary file gone."""
+    src = tmp_path / "small.pfm"
+    hio.write(src, np.ones((8, 8, 3), np.float32))
+    argv = ["filter", str(src), "-o", str(tmp_path / "out.pfm"), "--median", "3"]
+    proc = subprocess.Popen(
+        [sys.executable, "-c", BLOCKED, *argv],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=tmp_path,
+    )
+    try:
+        assert proc.stdout.readline() == b"blocked\n"
+        assert [p.name for p in tmp_path.glob(".partial.pfm.*.tmp")], "no temporary file"
+        time.sleep(0.2)  # well inside the hash
+        proc.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        code = proc.wait(timeout=30)
+        took = time.monotonic() - sent
+        err = proc.stderr.read().decode()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert code == 130, err
+    assert took < BOUND_S, f"ended {took:.2f} s after SIGINT"
+    assert err.strip().splitlines() == ["hdrjax filter: interrupted"], err
+    assert sorted(os.listdir(tmp_path)) == ["small.pfm"]  # no output, no temporary file
