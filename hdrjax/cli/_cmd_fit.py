@@ -36,7 +36,7 @@ TARGET_FORMS = (
     "mean=V (mean display luminance), pNN=V (display-luminance percentile NN, e.g. p1=0.02,"
     " p99=0.95), clipped=F (fraction of pixels at display white), reference=FILE (a display"
     " image of the input's size: 8-bit .png/.jpg/.tif decoded with --transfer, or linear"
-    " .exr/.hdr/.pfm)"
+    " .exr/.hdr/.pfm); and quality metrics to maximise: tmqi, naturalness, pu-ssim=FILE"
 )
 
 EPILOG = f"""targets (repeat --target; all are fitted together, as a sum of squared residuals):
@@ -45,6 +45,15 @@ EPILOG = f"""targets (repeat --target; all are fitted together, as a sum of squa
   clipped=F       fraction F of pixels at display white (soft count)
   reference=FILE  agreement with a display image of the input's size (RMS log error):
                   8-bit .png/.jpg/.tif decoded with --transfer, or linear .exr/.hdr/.pfm
+
+quality metrics to maximise (their residual is 1 - metric; they combine with the above):
+  tmqi            TMQI Q of the rendition against the input (Yeganeh & Wang 2013), the
+                  rendition encoded as written (--transfer, --gamma); prints Q, S and N
+  naturalness     TMQI's statistical naturalness N of the rendition alone (combine it with
+                  a fidelity target: alone it ignores the scene)
+  pu-ssim=FILE    PU21 SSIM (Mantiuk & Azimi 2021) against a reference rendition FILE (as
+                  for reference=), both shown on a display of white --peak cd/m² (100)
+                  and black 0.1 cd/m²
 
 exit status:
   0  the fit converged; the image was written
@@ -76,7 +85,8 @@ def register(subparsers) -> None:
         action="append",
         required=True,
         metavar="STAT=VALUE",
-        help="a target statistic (repeatable): mean=V, pNN=V, clipped=F or reference=FILE",
+        help="a target (repeatable): mean=V, pNN=V, clipped=F, reference=FILE, or a metric to"
+        " maximise: tmqi, naturalness, pu-ssim=FILE",
     )
     p.add_argument(
         "--param",
@@ -128,15 +138,27 @@ def _unit_value(text: str, value: str) -> float:
     return v
 
 
+METRICS = ("tmqi", "naturalness")
+"""The ``--target`` metrics given by name alone (maximised; no value)."""
+
+REFERENCE_KINDS = ("reference", "pu-ssim")
+"""The ``--target`` kinds whose value is a reference file."""
+
+
 def parse_targets(texts: list[str]) -> list[tuple[str, str, str]]:
     """Split ``--target`` texts into ``(kind, key, value)``; bad syntax → UsageError naming
-    the text and the valid forms. ``kind`` is ``mean``, ``percentile``, ``clipped`` or
-    ``reference``."""
+    the text and the valid forms. ``kind`` is ``mean``, ``percentile``, ``clipped``,
+    ``reference``, ``tmqi``, ``naturalness`` or ``pu-ssim``."""
     out = []
     for text in texts:
         name, sep, value = text.partition("=")
         name = name.strip().lower()
         value = value.strip()
+        if name in METRICS:
+            if sep:
+                raise _bad_target(text, f"{name} is maximised and takes no value")
+            out.append((name, name, ""))
+            continue
         if not sep or not value:
             raise _bad_target(text, "expected STAT=VALUE")
         if name == "mean":
@@ -145,6 +167,8 @@ def parse_targets(texts: list[str]) -> list[tuple[str, str, str]]:
             out.append(("clipped", "clipped", str(_unit_value(text, value))))
         elif name in ("reference", "ref"):
             out.append(("reference", "reference", value))
+        elif name in ("pu-ssim", "pussim", "pu_ssim"):
+            out.append(("pu-ssim", "pu-ssim", value))
         elif m := _PCT.match(name):
             q = float(m.group(1))
             if not 0.0 <= q <= 100.0:
@@ -199,6 +223,23 @@ def read_reference(path: str, transfer: str, gamma: float):
     return x
 
 
+def _reference_of_size(path: str, args, shape):
+    """:func:`read_reference`, of the input's height and width (else DataError)."""
+    ref = read_reference(path, args.transfer, args.gamma)
+    if ref.shape[:2] != tuple(shape):
+        raise DataError(
+            f"{path}: reference is {ref.shape[1]}x{ref.shape[0]},"
+            f" the input {shape[1]}x{shape[0]}; expected the same size"
+        )
+    return ref
+
+
+def _tmqi_gamma(args) -> float | None:
+    """TMQI reads the rendition as written: sRGB-encoded (``None``), ``x^(1/γ)``, or
+    linear (γ = 1)."""
+    return {"srgb": None, "gamma": float(args.gamma), "linear": 1.0}[args.transfer]
+
+
 def build_target(parsed, args, shape, weights, max_size):
     """The :mod:`hdrjax.targets` target of the parsed ``--target`` list and, per part, the
     labels of its statistics (in order)."""
@@ -217,14 +258,25 @@ def build_target(parsed, args, shape, weights, max_size):
             parts.append(ht.ClippedFraction(float(value)))
             labels.append((f"clipped={float(value):g}", float(value)))
         elif kind == "reference":
-            ref = read_reference(value, args.transfer, args.gamma)
-            if ref.shape[:2] != tuple(shape):
-                raise DataError(
-                    f"{value}: reference is {ref.shape[1]}x{ref.shape[0]},"
-                    f" the input {shape[1]}x{shape[0]}; expected the same size"
-                )
+            ref = _reference_of_size(value, args, shape)
             parts.append(ht.Reference(downscale(ref, max_size)))
             labels.append((f"reference={value} (RMS log error)", 0.0))
+        elif kind == "pu-ssim":
+            ref = _reference_of_size(value, args, shape)
+            peak = args.peak or 100.0
+            black = min(0.1, peak / 2)
+            shown = black + (peak - black) * np.clip(downscale(ref, max_size), 0.0, 1.0)
+            parts.append(ht.PUSSIM(shown, peak=peak, black=black))
+            labels.append((f"pu-ssim={value} (PU21 SSIM, maximised)", 1.0))
+        elif kind == "tmqi":
+            parts.append(ht.TMQI(gamma=_tmqi_gamma(args)))
+            labels.extend(
+                (f"tmqi {part} (maximised)", 1.0)
+                for part in ("Q", "S (structural fidelity)", "N (naturalness)")
+            )
+        elif kind == "naturalness":
+            parts.append(ht.Naturalness(gamma=_tmqi_gamma(args)))
+            labels.append(("naturalness (TMQI N, maximised)", 1.0))
     if pct:  # one Percentiles target: one sort per evaluation
         qs = [float(k[1:]) for k, _ in pct]
         parts.append(
@@ -240,7 +292,9 @@ def build_target(parsed, args, shape, weights, max_size):
 def run(args: argparse.Namespace) -> int:
     check_output(args)
     parsed = parse_targets(args.target)
-    refuse_overwriting_inputs([args.output], [v for kind, _, v in parsed if kind == "reference"])
+    refuse_overwriting_inputs(
+        [args.output], [v for kind, _, v in parsed if kind in REFERENCE_KINDS]
+    )
     if args.max_steps < 1:
         raise UsageError(f"--max-steps: expected an integer >= 1, got {args.max_steps}")
     if args.max_size < 0:
@@ -315,8 +369,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"not written: {args.output} (the fit did not converge; --force writes it)")
         return EXIT_NOT_CONVERGED
     display = res.operator(x)
-    if not any(kind == "reference" for kind, _, _ in parsed):
-        full = np.asarray(target.statistics(display))
+    if not any(kind in REFERENCE_KINDS for kind, _, _ in parsed):
+        full = np.asarray(target.statistics_for(display, x))
         print(
             "targets (full resolution): "
             + ", ".join(f"{lab}: {float(s):.4g}" for (lab, _), s in zip(labels, full, strict=True))

@@ -32,6 +32,7 @@ fitted parameters at the solution (forward-mode autodiff), in the parameters' ow
 
 import dataclasses
 import functools
+import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -454,6 +455,35 @@ _problem = functools.lru_cache(maxsize=256)(
 )
 
 
+def _positive(declared: tuple[float, float] | None) -> bool:
+    """Whether a parameter of this declared range is positive (``None``: undeclared, taken
+    as positive, as every operator parameter was before ranges were declared)."""
+    return declared is None or declared[0] >= 0
+
+
+def _within(
+    declared: tuple[float, float] | None, lo: float | None, hi: float | None, name: str, op: str
+) -> _Bound:
+    """The bounds ``(lo, hi)`` narrowed to the parameter's declared valid range, so that a
+    fit never leaves it (a fitted drago2003 ``bias`` above 1 is no operator); an infinite
+    end is no bound, and a lower end of 0 is none either where the parameter is fitted as
+    ``ln p`` (positive already)."""
+    if declared is None:
+        return lo, hi
+    d_lo, d_hi = (float(v) for v in declared)
+    if math.isfinite(d_lo) and d_lo != 0.0:
+        lo = d_lo if lo is None else max(lo, d_lo)
+    elif d_lo == 0.0 and math.isfinite(d_hi):
+        lo = 0.0 if lo is None else max(lo, 0.0)  # a two-sided range: (0, hi)
+    if math.isfinite(d_hi):
+        hi = d_hi if hi is None else min(hi, d_hi)
+    if lo is not None and hi is not None and not lo < hi:
+        raise ValueError(
+            f"bounds[{name!r}]: no value within the bounds is in {op}'s valid range {declared}"
+        )
+    return lo, hi
+
+
 def _setup(
     operator: AbstractOperator | str,
     target: AbstractTarget,
@@ -488,8 +518,10 @@ def _setup(
     extra = sorted(set(bounds) - set(names))
     if extra:
         raise ValueError(f"bounds: {extra} are not fitted parameters {list(names)}")
+    declared = {i.name: i.range for i in parameter_info(op)}
     if isinstance(log_space, bool):
-        log = tuple(log_space for _ in names)
+        # ``True``: every parameter that is positive (declared range from 0 up, or none)
+        log = tuple(log_space and _positive(declared.get(n)) for n in names)
     else:
         unknown = sorted(set(log_space) - set(names))
         if unknown:
@@ -502,6 +534,7 @@ def _setup(
         hi = None if hi is None else float(hi)
         if lo is not None and hi is not None and not lo < hi:
             raise ValueError(f"bounds[{n!r}]: expected lo < hi, got ({lo}, {hi})")
+        lo, hi = _within(declared.get(n), lo, hi, n, op.name)
         if lg and ((lo is not None and lo < 0) or (hi is not None and hi <= 0)):
             raise ValueError(f"bounds[{n!r}]: ({lo}, {hi}) not positive; {n} is in log space")
         bnds.append((lo, hi))
@@ -532,8 +565,12 @@ _ARGS_DOC = """
             that maximises a metric (``TMQI``, ``Naturalness``, ``PUSSIM``) it accepts every
             step that does not increase ``Σ r²`` (else only those that reduce it by ≥ 1% of
             the prediction), so that rounding noise near the optimum does not stall it.
-        bounds: ``{{name: (lo, hi)}}``, either side ``None`` for one-sided bounds.
-        log_space: optimise these (``True``: all) parameters as ``ln p``; they stay > 0.
+        bounds: ``{{name: (lo, hi)}}``, either side ``None`` for one-sided bounds; always
+            narrowed to the parameter's declared valid range (``hdrjax operators NAME``),
+            so a fitted operator is a valid one (drago2003's ``bias`` stays in (0, 1)).
+        log_space: optimise these (``True``: all positive ones: declared range from 0
+            up) parameters as ``ln p``; they stay > 0. Parameters that may be negative
+            (an ``exposure`` in EV) are fitted as they are.
         max_steps: solver step limit; running out is a failure code, not an answer.
         rtol, atol: tolerances of the default solver (1e-5/1e-6 in float32, 1e-10 in float64):
             it stops after an accepted step with ``max|Δz| < atol + rtol·max|z|`` and

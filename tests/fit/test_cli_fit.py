@@ -129,6 +129,8 @@ def test_reference_target_recovers_parameters(small_exr, tmp_path, capsys):
         ("mean=2", "outside [0, 1]"),
         ("p101=0.5", "outside [0, 100]"),
         ("median=0.5", "unknown statistic"),
+        ("tmqi=1", "tmqi is maximised and takes no value"),
+        ("pu-ssim", "expected STAT=VALUE"),
     ],
 )
 def test_bad_target_is_a_usage_error(small_exr, tmp_path, capsys, target, why):
@@ -148,3 +150,48 @@ def test_other_usage_and_data_errors(small_exr, tmp_path, capsys):
     missing = str(tmp_path / "missing.png")
     assert main(["fit", small_exr, "--target", f"reference={missing}", "-o", out]) == 1
     assert "missing.png" in capsys.readouterr().err
+
+
+def _printed(text: str, label: str) -> float:
+    return float(text.split(f"  {label}: ")[1].split()[0])
+
+
+def test_tmqi_target_maximises_the_quality_of_the_written_image(small_exr, tmp_path, capsys):
+    """``--target tmqi``: the fitted key is a maximum of TMQI Q (neighbouring keys score
+    lower), and the printed Q is that of the written 8-bit image."""
+    out = tmp_path / "tmqi.png"
+    argv = ["fit", small_exr, "--param", "key", "--target", "tmqi", "--max-size", "0",
+            "-o", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "status: converged" in text
+    key, q = _printed(text, "key"), _printed(text, "tmqi Q (maximised)")
+    white = _printed(text, "L_white")
+    hdr = np.asarray(hdrjax.io.read(small_exr).rgb(), np.float64)
+
+    def quality(k):
+        shown = np.asarray(hdrjax.tonemap(hdr, "reinhard2002", key=k, L_white=white), np.float64)
+        shown = np.clip(shown, 0, 1)
+        encoded = np.where(shown <= 0.0031308, 12.92 * shown, 1.055 * shown ** (1 / 2.4) - 0.055)
+        return float(hdrjax.metrics.tmqi(hdr, encoded).q)
+
+    assert 0.05 < key < 0.3  # an interior maximum (TMQI: 0.816 at 0.1, 0.799 at 0.18)
+    assert quality(key) > max(quality(0.8 * key), quality(1.25 * key))
+    np.testing.assert_allclose(quality(key), q, atol=1e-4)
+    written = np.asarray(Image.open(out), np.float64) / 255.0
+    np.testing.assert_allclose(float(hdrjax.metrics.tmqi(hdr, written).q), q, atol=2e-3)
+
+
+def test_pu_ssim_target_recovers_the_reference_renditions_key(small_exr, tmp_path, capsys):
+    ref = tmp_path / "ref.png"
+    assert main(["tonemap", small_exr, "--key", "0.3", "--white", "2.5", "-o", str(ref)]) == 0
+    capsys.readouterr()
+    argv = ["fit", small_exr, "--param", "key", "--set", "key=0.18", "--set", "L_white=2.5",
+            "--target", f"pu-ssim={ref}", "--max-size", "0",
+            "-o", str(tmp_path / "pu.png")]  # fmt: skip
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    np.testing.assert_allclose(_printed(text, "key"), 0.3, rtol=2e-2)  # an 8-bit reference
+    assert _printed(text, f"pu-ssim={ref} (PU21 SSIM, maximised)") > 0.999
+    # a reference is an input: never the output
+    assert main([*argv[:-1], str(ref)]) == 2

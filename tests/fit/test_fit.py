@@ -117,6 +117,28 @@ def test_log_space_keeps_parameters_positive_and_bounds_hold():
     assert 0.5 <= float(lin.params["L_max"]) < 0.6  # from 5.0 towards the bound, never past
 
 
+def test_fits_stay_in_the_declared_ranges_and_signed_parameters_are_not_logged():
+    """A fit never leaves a parameter's declared valid range (drago2003's bias was fitted
+    to 529 for a dark target: no operator), user bounds are narrowed to it, and a parameter
+    that may be negative (an exposure in EV, default 0) is not fitted as ``ln p`` (it stayed
+    at 0 and failed)."""
+    x = np.random.default_rng(0).lognormal(0, 2, (32, 48, 3)).astype(np.float32)
+    res = hf.fit("agx", x, ht.MeanLuminance(0.3), params="exposure")
+    assert res.success
+    np.testing.assert_allclose(float(res.statistics[0]), 0.3, rtol=1e-4)
+    assert float(res.params["exposure"]) < 0  # darker than the default exposure
+    # a mean the bias cannot reach within (0, 1): unsuccessful, and still a valid operator
+    res = hf.fit("drago2003", x, ht.MeanLuminance(0.05), params="bias")
+    assert not res.success
+    bias = float(res.params["bias"])
+    assert 0.99 < bias < 1.0
+    assert np.all(np.isfinite(np.asarray(hdrjax.tonemap(x, "drago2003", bias=bias))))
+    res = hf.fit("drago2003", x, ht.MeanLuminance(0.05), params="bias", bounds={"bias": (0.5, 2)})
+    assert 0.99 < float(res.params["bias"]) < 1.0
+    with pytest.raises(ValueError, match=r"^bounds\['bias'\]: no value within the bounds"):
+        hf.fit("drago2003", x, ht.MeanLuminance(0.05), params="bias", bounds={"bias": (1, 2)})
+
+
 def test_fit_batch_equals_separate_fits():
     frames = jnp.asarray(np.stack([_lognormal(s) * (s + 1) for s in range(3)]), jnp.float32)
     batch = hf.fit_batch(
