@@ -54,6 +54,7 @@ _ATTRIBUTES = {
     "operator_names": ".operators",
     "tonemap": ".operators",
     "show": "._show",
+    "tune_memory": "._memory",
 }
 
 __all__ = sorted([*_SUBMODULES, *_ATTRIBUTES, "__version__"])
@@ -105,6 +106,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         luminance as luminance,
         luminance_weights as luminance_weights,
     )
+    from ._memory import tune_memory as tune_memory
     from ._show import show as show
     from .display import (
         desaturate_highlights as desaturate_highlights,

@@ -39,6 +39,27 @@ class OwnCores(WorkerPlugin):
         os.sched_setaffinity(0, self.groups[k % len(self.groups)])
 
 
+class TunedMemory(WorkerPlugin):
+    """Runs :func:`hdrjax.tune_memory` in each worker before its first task, as the
+    command line does in its own process."""
+
+    name = "hdrjax-tuned-memory"
+
+    def setup(self, worker) -> None:
+        from .._memory import tune_memory
+
+        tune_memory()
+
+
+def tune_workers(client) -> None:
+    """Register :class:`TunedMemory` when this process is tuned (its JAX dispatch is
+    synchronous: :func:`hdrjax.tune_memory` ran here)."""
+    import jax
+
+    if not jax.config.read("jax_cpu_enable_async_dispatch"):
+        client.register_plugin(TunedMemory())
+
+
 def pin_workers(client, workers: int) -> None:
     """Register :class:`OwnCores` for a new local cluster of ``workers`` processes (where the
     platform lets a process choose its cores, and there are several workers)."""
@@ -48,4 +69,4 @@ def pin_workers(client, workers: int) -> None:
     client.register_plugin(OwnCores(core_groups(cores, workers)))
 
 
-__all__ = ["OwnCores", "core_groups", "pin_workers"]
+__all__ = ["OwnCores", "TunedMemory", "core_groups", "pin_workers", "tune_workers"]

@@ -423,9 +423,10 @@ def _client(workers: int | None, scheduler: Any):
         env=env,
     )
     client = Client(cluster)
-    from ._cores import pin_workers
+    from ._cores import pin_workers, tune_workers
 
     pin_workers(client, int(workers or 1))  # one XLA thread pool per core group
+    tune_workers(client)  # the workers' memory as this process's (hdrjax.tune_memory)
     return client, cluster, True
 
 

@@ -163,6 +163,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if getattr(args, "uses_jax", True):  # not for `operators`, which compiles nothing
         _enable_compilation_cache()
+        if argv is None:  # the command line's own process (not main([...]) in a program)
+            from .._memory import tune_memory
+
+            tune_memory()
     cluster = getattr(args, "workers", None) or getattr(args, "scheduler", None)
     # the command line itself (not ``main([...])`` in a program, nor a Dask cluster's
     # client, whose workers the normal exit shuts down): Ctrl-C ends it within a second

@@ -2,9 +2,12 @@
 the in-process path, and a worker killed mid-run loses no frame (the scheduler re-runs its
 tasks)."""
 
+import json
 import logging
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -167,3 +170,23 @@ def test_local_workers_each_run_on_their_own_cores():
         cluster.close()
     half = len(cores) // 2
     assert got == [cores[:half], cores[half : 2 * half]]
+
+
+def test_workers_of_a_tuned_process_are_tuned():
+    """A cluster started by a process that ran ``hdrjax.tune_memory`` (the command line
+    does) tunes its workers too: synchronous JAX dispatch, freed buffers kept."""
+    code = """
+import json, hdrjax
+hdrjax.tune_memory()
+from hdrjax.batch._run import _client
+client, cluster, _ = _client(1, None)
+try:
+    import jax
+    got = client.run(lambda: jax.config.read("jax_cpu_enable_async_dispatch"))
+finally:
+    client.close()
+    cluster.close()
+print(json.dumps(sorted(got.values())))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [False]
