@@ -7,7 +7,8 @@ solver (many small steps, each handing work to the pool) took over 6 min each, a
 each with one core apiece, while a busy process that is not XLA's costs only its share.
 So the cores this process may use are split into one disjoint group per worker (whole
 groups of ``cores // workers``; with more workers than cores, workers share single cores in
-turn), and each worker is pinned to its group as it starts, before it imports JAX.
+turn), and each worker is pinned to its group right after the cluster starts, before its
+first task.
 """
 
 import os

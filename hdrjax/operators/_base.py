@@ -346,16 +346,21 @@ class StatisticsSettings(NamedTuple):
         return (self.method, int(self.bins), float(self.delta))
 
 
+def _shared_luminance(rgb: Array, weights: tuple[float, float, float]) -> Array:
+    """The luminance image that the statistics pass and the branches share (XLA would
+    otherwise compute it twice, once per consumer's shape)."""
+    L = luminance(rgb, weights)
+    return jax.lax.optimization_barrier(L.reshape(-1)).reshape(L.shape)
+
+
 def _decide(rgb: Array, weights: tuple[float, float, float], stats: Any):
     """The part of :func:`dispatch` before its branch: ``(L, finite, statistics, key)``."""
-    L = luminance(rgb, weights)
     if stats is None or StatisticsSettings(*stats).method != "histogram":
         # (the exact method sorts: only in the branch that needs it)
+        L = luminance(rgb, weights)
         return L, jnp.isfinite(jnp.sum(L)), None, ()
     key = StatisticsSettings(*stats).key
-    # one luminance image for the statistics pass and the branches (XLA would
-    # otherwise compute it twice, once per consumer's shape)
-    L = jax.lax.optimization_barrier(L.reshape(-1)).reshape(L.shape)
+    L = _shared_luminance(rgb, weights)
     finite, st = summarise(L, method=key[0], bins=key[1], delta=key[2], assume_finite=True)
     return L, finite, st, key
 
@@ -389,8 +394,8 @@ def dispatch(
 
     Traced code compiles both branches (``lax.cond``). An eager call of one image decides
     first, in a compiled pass of its own, and compiles only the branch it takes
-    (:meth:`AbstractOperator.__call__`): half the compile time for the first image of a
-    size, as a clean image needs no masked path."""
+    (:meth:`AbstractOperator.__call__`): about 60 % of the compile time for the first
+    image of a size (:data:`DECIDE_FIRST_PIXELS`), as a clean image needs no masked path."""
 
     def clean(x, L, st, key):
         return fn(Prepared(x, L, L, clean=True, stats=st, stats_key=key))
@@ -404,11 +409,10 @@ def dispatch(
         take_clean, st = _BRANCH.taken.pop()
         if not take_clean:
             return dirty(rgb)
-        L = luminance(rgb, weights)
-        key = StatisticsSettings(*stats).key if st is not None and stats is not None else ()
-        if st is not None:  # as _decide: the luminance image shared by the passes
-            L = jax.lax.optimization_barrier(L.reshape(-1)).reshape(L.shape)
-        return clean(rgb, L, st, key)
+        if st is None:
+            return clean(rgb, luminance(rgb, weights), None, ())
+        key = StatisticsSettings(*stats).key if stats is not None else ()
+        return clean(rgb, _shared_luminance(rgb, weights), st, key)  # as _decide
     L, finite, st, key = _decide(rgb, weights, stats)
     return jax.lax.cond(finite, lambda x, st: clean(x, L, st, key), lambda x, st: dirty(x), rgb, st)
 
