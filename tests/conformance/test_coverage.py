@@ -66,6 +66,8 @@ EXEMPT = {
     "hdrjax.display.render_figure": "figure to pixels (tests/display/test_false_color.py)",
     "hdrjax.lights.plot_lights": "matplotlib figure (tests/lights/test_detect.py)",
     "hdrjax.show": "matplotlib figure of tone-mapped images (tests/core/test_show.py)",
+    # process settings, no image
+    "hdrjax.tune_memory": "allocator and dispatch settings, no image (tests/core/test_memory.py)",
     # files: the fuzz test accepts only ReadError or a correct image for every reader
     # (tests/io/test_io_errors_fuzz.py); round trips in tests/conformance/test_properties.py
     # exposure brackets: integer code values (N, H, W, 3) with exposure times, not linear
