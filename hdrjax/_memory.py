@@ -13,10 +13,11 @@ most operators. Two settings keep freed buffers for reuse instead:
   XLA's worker threads, whose glibc arenas cannot hold buffers above 64 MiB and map them
   afresh on every call.
 
-Measured on the 2-core development machine (``benchmarks/bench_memory.py``): Reinhard 2002
-on a 4096² RGB image 106 → 37 ms, a 5×5 mean filter 200 → 65 ms, TMQI of a 2048×1024 pair
-102 → 70 ms, and the tiled 5×5 median of a 4096² image 247 → 176 ms (synchronous dispatch
-loses the overlap of one tile's copy-out with the next tile's computation, and still wins).
+Measured on the 2-core development machine (``benchmarks/bench_memory.py``, each setting in a
+fresh process): Reinhard 2002 on a 4096² RGB image 111 → 39.7 ms, a 5×5 mean filter
+206 → 74.8 ms, TMQI of a 2048×1024 pair 107 → 66.5 ms. The tiled 5×5 median of a 4096² image
+went from 247 to 176 ms in a run by hand (synchronous dispatch loses the overlap of one
+tile's copy-out with the next tile's computation, and still wins).
 
 The cost: the process keeps up to :data:`KEEP_BYTES` of freed memory, and JAX calls on CPU
 return when their result is ready. The command line tunes its own process; a program or

@@ -117,7 +117,11 @@ def register(subparsers) -> None:
     )
     add_table_and_scale_arguments(p)
     add_colour_arguments(p)
-    add_encoding_arguments(p)
+    add_encoding_arguments(
+        p,
+        peak_help="cd/m² of the display's white: for --display PQ (default 1000), and for "
+        "--target pu-ssim=, both renditions shown at this white (default 100)",
+    )
     p.set_defaults(func=run)
 
 

@@ -156,9 +156,13 @@ def add_table_and_scale_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
+def add_encoding_arguments(
+    p: argparse.ArgumentParser,
+    peak_help: str = "cd/m² of the display's white for --display PQ (default 1000)",
+) -> None:
     """``--display``, ``--peak``, ``--gamut``, ``--transfer``, ``--gamma``, ``--bits``: how
-    :func:`write_output` encodes."""
+    :func:`write_output` encodes (``peak_help``: what else the command uses ``--peak``
+    for)."""
     p.add_argument(
         "--display",
         metavar="NAME",
@@ -169,7 +173,7 @@ def add_encoding_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--peak",
         type=positive_float,
-        help="cd/m² of the display's white for --display PQ (default 1000)",
+        help=peak_help,
     )
     p.add_argument(
         "--gamut",

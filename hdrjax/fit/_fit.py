@@ -243,7 +243,9 @@ def _finish(
     fitted = prob.with_params(op, p)
     r = target.residuals_for(fitted(small), small)
     stats, jac = _stats_and_jacobian(
-        lambda q: target.statistics_for(prob.with_params(op, q)(small), small), p
+        lambda q: target.statistics_for(prob.with_params(op, q)(small), small),
+        p,
+        type(op).forward_mode,
     )
     loss = jnp.sum(r * r)
     finite = jnp.isfinite(loss) & jnp.all(jnp.isfinite(stats))
@@ -256,9 +258,12 @@ def _finish(
 _UNROLL = 4  # unknowns up to which the Jacobian's JVPs are unrolled (compile time grows)
 
 
-def _stats_and_jacobian(fn: Callable[[Any], Array], p: dict[str, Array]):
+def _stats_and_jacobian(fn: Callable[[Any], Array], p: dict[str, Array], forward: bool = True):
     """``fn(p)`` and ``∂fn/∂p`` by name (each ``(n, *p[name].shape)``), as ``jax.jacfwd``
-    but with the JVPs unrolled for up to ``_UNROLL`` unknowns (see :func:`_dense_jvp`)."""
+    but with the JVPs unrolled for up to ``_UNROLL`` unknowns (see :func:`_dense_jvp`);
+    ``forward=False``: ``jax.jacrev`` (``n`` is a target's few statistics)."""
+    if not forward:
+        return fn(p), jax.jacrev(fn)(p)
     flat, unravel = ravel_pytree(p)
     k = flat.shape[0]
     if k > _UNROLL:
@@ -462,19 +467,24 @@ def _positive(declared: tuple[float, float] | None) -> bool:
 
 
 def _within(
-    declared: tuple[float, float] | None, lo: float | None, hi: float | None, name: str, op: str
+    declared: tuple[float, float] | None,
+    lo: float | None,
+    hi: float | None,
+    name: str,
+    op: str,
+    in_log: bool,
 ) -> _Bound:
     """The bounds ``(lo, hi)`` narrowed to the parameter's declared valid range, so that a
     fit never leaves it (a fitted drago2003 ``bias`` above 1 is no operator); an infinite
-    end is no bound, and a lower end of 0 is none either where the parameter is fitted as
-    ``ln p`` (positive already)."""
+    end is no bound, and a lower end of 0 is none only where the parameter is fitted as
+    ``ln p`` (``in_log``: positive already) and its range has no upper end."""
     if declared is None:
         return lo, hi
     d_lo, d_hi = (float(v) for v in declared)
     if math.isfinite(d_lo) and d_lo != 0.0:
         lo = d_lo if lo is None else max(lo, d_lo)
-    elif d_lo == 0.0 and math.isfinite(d_hi):
-        lo = 0.0 if lo is None else max(lo, 0.0)  # a two-sided range: (0, hi)
+    elif d_lo == 0.0 and (math.isfinite(d_hi) or not in_log):
+        lo = 0.0 if lo is None else max(lo, 0.0)  # (0, hi), or a positive p fitted as p
     if math.isfinite(d_hi):
         hi = d_hi if hi is None else min(hi, d_hi)
     if lo is not None and hi is not None and not lo < hi:
@@ -484,8 +494,22 @@ def _within(
     return lo, hi
 
 
+def _measured(op: AbstractOperator, frame: Array) -> tuple[str, ...]:
+    """The unset parameters that :meth:`~AbstractOperator.measure` sets to numbers for an
+    image like ``frame`` (traced, not run): not the alternatives it leaves unset (linear's
+    camera exposure when it measures ``L_max``), not its flags and node indices."""
+    measured = eqx.filter_eval_shape(lambda o, x: o.measure(x), op, frame)
+    return tuple(
+        n
+        for n in op.unset()
+        if isinstance(v := getattr(measured, n), jax.ShapeDtypeStruct)
+        and jnp.issubdtype(v.dtype, jnp.inexact)
+    )
+
+
 def _setup(
     operator: AbstractOperator | str,
+    frame: Array,
     target: AbstractTarget,
     params: Sequence[str] | str | None,
     solver: Any,
@@ -501,7 +525,7 @@ def _setup(
         raise ValueError(f"target: expected an hdrjax.targets target, got {target!r}")
     if isinstance(params, str):
         params = (params,)
-    names = tuple(params) if params is not None else op.unset()
+    names = tuple(params) if params is not None else _measured(op, frame)
     fields = {f.name for f in dataclasses.fields(op) if not f.metadata.get("static", False)}
     if not names:
         raise ValueError(
@@ -534,7 +558,7 @@ def _setup(
         hi = None if hi is None else float(hi)
         if lo is not None and hi is not None and not lo < hi:
             raise ValueError(f"bounds[{n!r}]: expected lo < hi, got ({lo}, {hi})")
-        lo, hi = _within(declared.get(n), lo, hi, n, op.name)
+        lo, hi = _within(declared.get(n), lo, hi, n, op.name, lg)
         if lg and ((lo is not None and lo < 0) or (hi is not None and hi <= 0)):
             raise ValueError(f"bounds[{n!r}]: ({lo}, {hi}) not positive; {n} is in log space")
         bnds.append((lo, hi))
@@ -542,7 +566,10 @@ def _setup(
         x64 = jnp.result_type(float) == jnp.float64
         rtol = rtol if rtol is not None else (1e-10 if x64 else 1e-5)
         atol = atol if atol is not None else (1e-10 if x64 else 1e-6)
-        solver = _default_solver(float(rtol), float(atol), _maximises(target))
+        if type(op).forward_mode:
+            solver = _default_solver(float(rtol), float(atol), _maximises(target))
+        else:  # no Jacobian-vector products: a minimiser, one reverse-mode gradient a step
+            solver = optx.BFGS(rtol=float(rtol), atol=float(atol))
     elif rtol is not None or atol is not None:
         raise ValueError("rtol/atol: set them on the solver you pass")
     return _problem(names, tuple(bnds), log, _output_needs_unset(op)), op, solver
@@ -554,8 +581,10 @@ _ARGS_DOC = """
             ones are measured from the image) or a registered name.
         {image}
         target: an :mod:`hdrjax.targets` target (combine several with ``+``).
-        params: names of the array fields to fit (default: the operator's unset ones,
-            e.g. ``("key", "L_white", "log_average")`` for ``Reinhard2002()``).
+        params: names of the array fields to fit (default: the unset ones the operator
+            measures as numbers, e.g. ``("key", "L_white", "log_average")`` for
+            ``Reinhard2002()``, ``("L_max",)`` for ``Linear()``; not flags such as
+            reinhard2002_auto's ``local``).
         solver: any optimistix least-squares solver or minimiser (e.g. ``optx.BFGS``);
             default ``optx.LevenbergMarquardt`` with ``rtol``/``atol`` (damping ``λ = 1``
             at the start, in ``z`` units, divided by 3.5 after each step whose actual
@@ -630,10 +659,12 @@ def fit(
     >>> bool(res.success), round(float(res.statistics[0]), 4)
     (True, 0.3)
     """
-    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
     image = as_float_image(image, "image")
     if image.ndim != 3:
         raise ValueError(f"image: expected (H, W, 3), got {image.shape}; use fit_batch")
+    prob, op, solver = _setup(
+        operator, image, target, params, solver, bounds, log_space, rtol, atol
+    )
     args = (prob, op, image, target, solver, int(max_steps), max_size, bool(throw))
     return _watched(_fit_jit, args, progress, image, unit="step", desc=f"fit {op.name}")
 
@@ -677,10 +708,12 @@ def fit_batch(
     Returns:
         A batched :class:`FitResult`.
     """
-    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
     frames = as_float_image(frames, "frames")
     if frames.ndim != 4:
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
+    prob, op, solver = _setup(
+        operator, frames[0], target, params, solver, bounds, log_space, rtol, atol
+    )
     if vectorize is None:
         vectorize = jax.default_backend() != "cpu"
     args = (prob, op, frames, target, solver, int(max_steps), max_size, bool(throw))
@@ -731,10 +764,12 @@ def fit_sequence(
         A batched :class:`FitResult`; ``loss`` is each frame's target loss (without the
         penalty); ``steps`` and ``result`` are the joint solve's, repeated per frame.
     """
-    prob, op, solver = _setup(operator, target, params, solver, bounds, log_space, rtol, atol)
     frames = as_float_image(frames, "frames")
     if frames.ndim != 4:
         raise ValueError(f"frames: expected (T, H, W, 3), got {frames.shape}")
+    prob, op, solver = _setup(
+        operator, frames[0], target, params, solver, bounds, log_space, rtol, atol
+    )
     if not float(smoothness) >= 0:
         raise ValueError(f"smoothness: expected >= 0, got {smoothness}")
     args = (prob, op, frames, target, solver, int(max_steps), max_size, bool(throw))

@@ -524,6 +524,10 @@ class AbstractOperator(eqx.Module):
     operator maps luminance with the ``weights`` of the image's primaries."""
     default_fit_params: ClassVar[tuple[str, ...]] = ()
     """What ``hdrjax fit`` fits when no ``--param`` is given."""
+    forward_mode: ClassVar[bool] = True
+    """Whether forward-mode derivatives (``jax.jvp``) pass through the operator. False
+    where its gradients are defined for reverse mode only (a custom VJP): fits then use a
+    minimiser (BFGS) and reverse-mode Jacobians (:func:`hdrjax.fit.fit`)."""
     rounding: ClassVar[float] = 1e-6
     """Absolute error (display units) of float32 results from rounding alone: two
     evaluations that differ only in the order of operations (compiled against eager, merged

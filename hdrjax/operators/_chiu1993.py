@@ -184,6 +184,7 @@ class Chiu1993(AbstractOperator):
     reference: ClassVar[str] = REFERENCE
     scale_invariant: ClassVar[bool] = True
     default_fit_params: ClassVar[tuple[str, ...]] = ("k",)
+    forward_mode: ClassVar[bool] = False  # _bounded_cotangent is a custom VJP
 
     k: Array = parameter(
         8.0, help="divisor of the scaling function s = 1 / (k L_blur)", range="(0, inf)"

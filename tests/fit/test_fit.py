@@ -1,5 +1,7 @@
 """hdrjax.fit: recovery of known parameters, sensitivities, result codes, bounds, batches."""
 
+import re
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -137,6 +139,33 @@ def test_fits_stay_in_the_declared_ranges_and_signed_parameters_are_not_logged()
     assert 0.99 < float(res.params["bias"]) < 1.0
     with pytest.raises(ValueError, match=r"^bounds\['bias'\]: no value within the bounds"):
         hf.fit("drago2003", x, ht.MeanLuminance(0.05), params="bias", bounds={"bias": (1, 2)})
+    # a positive parameter fitted as it is (not as ln p) keeps its declared lower end 0:
+    # exponential's log-average went to -1.65 for a mean it cannot reach ("success")
+    res = hf.fit("exponential", x, ht.MeanLuminance(0.999), params="log_average", log_space=False)
+    assert float(res.params["log_average"]) >= 0.0
+    assert not res.success
+
+
+def test_default_parameters_and_solver_fit_every_kind_of_operator():
+    """``params=None`` fits what the operator measures as numbers (linear: ``L_max``, not
+    its unset camera exposure; reinhard2002_auto: not its ``local`` flag; both raised), and
+    an operator without forward-mode derivatives (chiu1993's custom VJP: every default fit
+    raised a TypeError) is fitted by a minimiser with reverse-mode Jacobians."""
+    x = np.random.default_rng(0).lognormal(0, 2, (16, 24, 3)).astype(np.float32)
+    # the defaults, as a bound on another name lists them (the error comes before compiling)
+    for name, fitted in [
+        ("linear", "['L_max']"),
+        ("reinhard2002_auto", "['key', 'L_white', 'log_average']"),
+    ]:
+        with pytest.raises(
+            ValueError, match=rf"^bounds: \['q'\] are not fitted parameters {re.escape(fitted)}$"
+        ):
+            hf.fit(name, x, ht.MeanLuminance(0.3), bounds={"q": (0, 1)})
+    assert hf.fit("linear", x, ht.MeanLuminance(0.3)).success
+    chiu = hf.fit("chiu1993", x, ht.MeanLuminance(0.3), params="k")
+    assert chiu.success
+    np.testing.assert_allclose(float(chiu.statistics[0]), 0.3, rtol=1e-4)
+    assert np.isfinite(np.asarray(chiu.jacobian["k"])).all() and float(chiu.jacobian["k"][0]) < 0
 
 
 def test_fit_batch_equals_separate_fits():

@@ -13,6 +13,8 @@ import pytest
 import hdrjax
 from hdrjax.operators import get_operator, operator_names, parameter, parameter_info
 
+from .cases import make
+
 NAMES = operator_names()
 
 
@@ -153,3 +155,27 @@ def test_parameter_helper_refuses_inconsistent_declarations():
         parameter(1.0, help="x", range="0..1")
     info = parameter(1.0, help="x", range="(0, 1]").metadata["hdrjax"]
     assert info.contains(1.0) and not info.contains(0.0) and info.range_text() == "(0, 1]"
+
+
+def _traces_forward_mode(op, x) -> bool:
+    try:
+        jax.jit(lambda v: jax.jvp(op, (v,), (v,))).lower(x)  # lowered, not compiled
+    except TypeError as e:
+        if "custom_vjp" not in str(e):
+            raise
+        return False
+    return True
+
+
+def test_forward_mode_is_declared():
+    """``forward_mode`` says whether ``jax.jvp`` passes through the operator (fits choose
+    their solver and Jacobian by it: chiu1993's custom VJP made every default fit of it a
+    TypeError)."""
+    x = np.random.default_rng(0).lognormal(0.0, 1.0, (6, 8, 3)).astype(np.float32)
+    mismatched = []
+    for name in NAMES:
+        op = make(name)
+        if _traces_forward_mode(op, x) != get_operator(name).forward_mode:
+            mismatched.append(name)
+    assert not mismatched, f"forward_mode declared wrongly: {mismatched}"
+    assert not get_operator("chiu1993").forward_mode
