@@ -99,13 +99,17 @@ def luminance(
 def apply_matrix(x: Float[Array, "*batch 3"], m: ArrayLike) -> Float[Array, "*batch 3"]:
     """``m @ pixel`` for every pixel of ``x`` (channels last), ``m`` a 3×3 matrix.
 
-    Written as scaled slices, as :func:`luminance` is: XLA:CPU fuses them into the
+    Written as each channel's slice times a column of ``m``: XLA:CPU fuses that into the
     consumer's pass, where a dot (``einsum``, ``x @ m.T``) with its inner dimension of 3
-    writes the converted image out first and ran more than ten times slower at 1024².
+    writes the converted image out first and ran more than ten times slower at 1024². The
+    columns are broadcast along the channel axis rather than the three output channels
+    concatenated: a concatenation branches on the channel in the fused loop, which made
+    tone mapping an XYZ file 1.2–1.5× as slow as the same pixels in sRGB
+    (``benchmarks/bench_colour.py``).
     """
     m = jnp.asarray(m, x.dtype)
-    r, g, b = x[..., 0:1], x[..., 1:2], x[..., 2:3]
-    return jnp.concatenate([r * m[i, 0] + g * m[i, 1] + b * m[i, 2] for i in range(3)], axis=-1)
+    col = [m[:, k].reshape((1,) * (x.ndim - 1) + (3,)) for k in range(3)]
+    return x[..., 0:1] * col[0] + x[..., 1:2] * col[1] + x[..., 2:3] * col[2]
 
 
 def channel_max(x: Float[Array, "*batch 3"], keepdims: bool = False) -> Array:

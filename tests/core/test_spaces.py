@@ -112,6 +112,20 @@ def test_convert_is_differentiable_and_keeps_nan_in_its_pixel():
         assert spaces.convert(np.ones((2, 3)), m).dtype == jnp.float64
 
 
+def test_conversion_is_one_expression_per_channel_for_the_fused_loop():
+    """The matrix is applied as channel slices times its columns, broadcast: no concatenate
+    and no dot, which in the operator's fused mapping loop branched on the channel (an XYZ
+    file tone-mapped 1.3–1.5× slower than sRGB pixels; ``benchmarks/bench_colour.py``) or
+    wrote the converted image out first. Equal to ``x @ m.T``."""
+    from hdrjax._colour import apply_matrix
+
+    m = spaces.conversion_matrix(XYZ_FILE).astype(np.float32)
+    x = RNG.uniform(0, 1, (4, 5, 3)).astype(np.float32)
+    prims = {e.primitive.name for e in jax.make_jaxpr(apply_matrix)(x, m).jaxpr.eqns}
+    assert not prims & {"concatenate", "dot_general"}, prims
+    np.testing.assert_allclose(np.asarray(apply_matrix(x, m)), x @ m.T, rtol=1e-6, atol=1e-7)
+
+
 def test_srgb_files_do_not_import_colour_science():
     """sRGB needs no colour-science (its import costs ~2 s of every command's start-up)."""
     code = (
