@@ -49,12 +49,15 @@ from ._durand2002 import Durand2002 as Durand2002
 from ._fattal2002 import Fattal2002 as Fattal2002
 from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
 from ._kimkautz2008 import KimKautz2008 as KimKautz2008
+from ._krawczyk2005 import Krawczyk2005 as Krawczyk2005
+from ._kuang2007 import Kuang2007 as Kuang2007
 from ._linear import (
     Q_FACTOR as Q_FACTOR,
     Linear as Linear,
     ev100_luminance as ev100_luminance,
     saturation_luminance as saturation_luminance,
 )
+from ._lischinski2006 import Lischinski2006 as Lischinski2006
 from ._mai2011 import Mai2011 as Mai2011
 from ._mantiuk2008 import Mantiuk2008 as Mantiuk2008
 from ._pattanaik2000 import (

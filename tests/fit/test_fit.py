@@ -294,11 +294,14 @@ def test_only_feeds_parameters_do_not_change_the_output(name):
     # what the fit relies on to skip measuring (``only_feeds``, over the registry): with the
     # estimated parameter set, the values of the parameters that feed it change nothing
     x = jnp.asarray(_lognormal(5, 8), jnp.float32)
+    # the shape of each measured value (lischinski2006's zone exposures are a vector)
+    measured = eqx.filter_eval_shape(lambda o, v: o.measure(v), hdrjax.make_operator(name), x)
     for q, ps in _feeding(name).items():
         op = eqx.tree_at(
             lambda o, q=q: getattr(o, q),
             hdrjax.make_operator(name),
-            jnp.asarray(0.37, jnp.float32),  # not the value the feeding ones would give
+            # not the value the feeding ones would give
+            jnp.full(getattr(measured, q).shape, 0.37, jnp.float32),
             is_leaf=lambda v: v is None,
         )
         want = np.asarray(op(x))

@@ -55,6 +55,11 @@ NOT_DIFFERENTIABLE = {
     "display": "mantiuk2008: choice of pfstmo's named display (string)",
     "visual_model": "mantiuk2008: choice of the visual model's components (string)",
     "tol": "an iterative solver's stopping tolerance (a static float)",
+    "max_iterations": "an iterative solver's iteration cap (integer)",
+    "offset": "lischinski2006: luminance offset of the zones' origin and the log luminance"
+    " (a static float, HDR Toolbox's)",
+    "zone_quantile": "lischinski2006: quantile of each zone from the histogram (constant for"
+    " jax.grad)",
     "sigma_s": "durand2002: spatial scale; sets the integer kernel radius and the halo",
     "max_segments": "durand2002: static bound on the bilateral filter's segments (integer)",
     "detail_level": "fattal2002: number of pyramid levels left unattenuated (integer)",
@@ -67,6 +72,11 @@ NOT_DIFFERENTIABLE = {
     "sigma": "chiu1993: blur scale in pixels; sets the integer kernel width and the halo",
     "passes": "chiu1993: number of smoothing passes (integer)",
     "glare_size": "chiu1993: glare kernel width in pixels (integer)",
+    "range_sigma": "krawczyk2005: bilateral grid's range sampling; sets the grid's depth",
+    "anchor_percentile": "krawczyk2005: histogram percentile (a rank: constant for jax.grad)",
+    "merge_distance": "krawczyk2005: threshold of the discrete merging of frameworks",
+    "min_probability": "krawczyk2005: threshold of the discrete merging of frameworks",
+    "surround": "kuang2007: choice of the viewing surround's lightness exponent (string)",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
@@ -74,6 +84,7 @@ NOT_DIFFERENTIABLE = {
 DISCRETE = {
     ("reinhard2002_auto", "local"): "the local/global choice (1 or 0) of the JGT switch",
     ("mantiuk2008", "white_y"): "selects the curve node pulled to the display's peak",
+    ("lischinski2006", "zone_origin"): "moves the pixels' discrete zone assignment only",
 }
 
 # Vector parameters only some of whose elements reach the output on the test image: an
@@ -84,6 +95,7 @@ SPARSE = {
     " pfstmo's floor of 1e-5) map no pixel",
     ("ward1997", "cdf"): "tone-curve points between the bins the image's luminances fill",
     ("mantiuk2008", "curve"): "tone-curve nodes outside the image's luminances map no pixel",
+    ("lischinski2006", "zone_exposures"): "zones outside the image's luminances hold no pixel",
 }
 
 R2004 = dict(f=0.5, m=0.6, a=0.3, c=0.4, channel_average=[0.2, 0.3, 0.25], log_average=0.05,
@@ -125,6 +137,32 @@ CASES = [
         ("sigma_r", "base_contrast", "saturation", "L_min", "L_max", "L_low", "L_high"),
     ),
     ("chiu1993", dict(k=6.0, glare=0.7, glare_power=6.0), ("k", "glare", "glare_power")),
+    ("krawczyk2005", dict(articulation_sigma=1.0), ("articulation_sigma",)),
+    (
+        "lischinski2006",
+        dict(
+            alpha=1.3,
+            lambda_=0.3,
+            epsilon=0.05,
+            constraint_weight=0.1,
+            zone_origin=1e-3,
+            zone_exposures=np.linspace(-4.0, 1.0, 144),
+            tol=1e-14,
+        ),
+        ("alpha", "lambda_", "epsilon", "constraint_weight", "zone_origin", "zone_exposures"),
+    ),
+    # the key and log-average reach the output through the zones' targets measured from
+    # the histogram (the case compiles the statistics pass)
+    (
+        "lischinski2006",
+        dict(key=0.2, log_average=0.05, zone_origin=1e-3, tol=1e-13),
+        ("key", "log_average"),
+    ),
+    (
+        "kuang2007",
+        dict(L_peak=15000.0, p=0.7, sigma_r=0.4, L_max=20.0),
+        ("L_peak", "p", "sigma_r", "L_max"),
+    ),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0), ("L_wa", "L_dmax")),
     ("ferwerda1996", dict(L_wa=0.5, L_dmax=100.0, compat="hdrtoolbox"), ("L_wa", "L_dmax")),
     (

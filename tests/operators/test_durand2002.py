@@ -103,6 +103,22 @@ def ssim(a: np.ndarray, b: np.ndarray) -> float:
     return float(s.mean())
 
 
+def criterion(got: np.ndarray, want: np.ndarray) -> tuple[float, float, float]:
+    """Issue 21's comparison of two renditions: SSIM, mean and largest absolute difference
+    of their luminances clipped to [0, 1] and sRGB-encoded."""
+    a = encoded_luminance(np.asarray(got, np.float64))
+    b = encoded_luminance(np.asarray(want, np.float64))
+    d = np.abs(a - b)
+    return ssim(a, b), float(d.mean()), float(d.max())
+
+
+def assert_parity(got, want, ssim_tight: float, mad_tight: float, max_tight: float = 1.0):
+    """Issue 21's criterion (SSIM ≥ 0.97, mean ≤ 0.02) and a test's tighter bounds."""
+    s, mad, top = criterion(got, want)
+    assert s >= 0.97 and mad <= 0.02, (s, mad)
+    assert s >= ssim_tight and mad <= mad_tight and top <= max_tight, (s, mad, top)
+
+
 def test_inputs_are_the_fixtures():
     sums = [float(np.sum(x, dtype=np.float64)) for x in inputs()]
     np.testing.assert_allclose(sums, fixtures()["input_sum"], rtol=1e-12)
