@@ -60,6 +60,7 @@ from ._linear import (
 from ._lischinski2006 import Lischinski2006 as Lischinski2006
 from ._mai2011 import Mai2011 as Mai2011
 from ._mantiuk2008 import Mantiuk2008 as Mantiuk2008
+from ._paris2011 import Paris2011 as Paris2011
 from ._pattanaik2000 import (
     AdaptationState as AdaptationState,
     Pattanaik2000 as Pattanaik2000,

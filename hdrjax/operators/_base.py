@@ -746,6 +746,17 @@ def bound_stats(op: "AbstractOperator", stats: Any) -> LuminanceStats:
     return checked_statistics(op, stats).luminance_stats()
 
 
+def filled_with_first_valid(x: Array, valid: Array) -> Array:
+    """``x`` (``(H, W)`` or ``(H, W, C)``) with its invalid pixels given the value of the
+    first valid pixel (raster order): for whole-image filters and solves, whose every
+    pixel reaches every other, so that a bad pixel brings in no value of its own (the
+    caller's mapping puts the bad pixels back)."""
+    first = jnp.argmax(valid.reshape(-1))
+    pixels = x.reshape((-1,) + x.shape[valid.ndim :])
+    v = valid.reshape(valid.shape + (1,) * (x.ndim - valid.ndim))
+    return jnp.where(v, x, pixels[first])
+
+
 def fill(op: _Op, **values: Any) -> _Op:
     """``op`` with the given parameters set (the one way operators bind measured values)."""
     names = tuple(values)

@@ -71,7 +71,14 @@ from jaxtyping import Array
 
 from .._scale import quotient
 from .._stats import percentile_by_selection
-from ._base import AbstractOperator, Prepared, parameter, register, weights_field
+from ._base import (
+    AbstractOperator,
+    Prepared,
+    filled_with_first_valid,
+    parameter,
+    register,
+    weights_field,
+)
 
 REFERENCE = (
     "Fattal, Lischinski, Werman 2002, Gradient domain high dynamic range compression, ACM"
@@ -249,12 +256,6 @@ def _log_luminance(Y: Array) -> Array:
     return jnp.log(100.0 * jnp.clip(r, 0.0, 1.0) + LOG_OFFSET)
 
 
-def _filled(Y: Array, valid: Array) -> Array:
-    """``Y`` with its invalid pixels replaced by the first valid one (raster order)."""
-    first = jnp.argmax(valid.reshape(-1))
-    return jnp.where(valid, Y, Y.reshape(-1)[first])
-
-
 @register("fattal2002")
 class Fattal2002(AbstractOperator):
     """Fattal, Lischinski & Werman 2002 gradient-domain compression with pfstmo_fattal02's
@@ -349,7 +350,7 @@ class Fattal2002(AbstractOperator):
 
     def _apply(self, p: Prepared) -> Array:
         dt = p.rgb.dtype
-        H = _log_luminance(p.L if p.clean else _filled(p.L, p.valid()))
+        H = _log_luminance(p.L if p.clean else filled_with_first_valid(p.L, p.valid()))
         phi = attenuation(
             H,
             self.alpha.astype(dt),

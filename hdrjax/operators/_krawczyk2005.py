@@ -7,8 +7,12 @@ Reference:
     for high dynamic range images." Computer Graphics Forum 24(3):635–645 (Proceedings of
     Eurographics 2005). https://doi.org/10.1111/j.1467-8659.2005.00888.x
 
-With ``Y = log10 L`` (``L`` the luminance, Rec. 709 weights, any units: the operator is
-scale invariant) the steps are:
+With ``Y = log10 L`` (``L`` the luminance, Rec. 709 weights, any units) the steps are
+below. They depend on ``L`` only through differences of ``Y``, but the histograms that
+carry them sit on the package's fixed grid of ``log2 L``: scaling an image by a factor other
+than a power of two moves pixels across bin edges, and the clustering, which is
+discontinuous, can then find other frameworks (on a 12 × 16 test image, scaling by 2^0.5
+changes the result by up to 0.41). So the operator is not declared scale invariant.
 
 1. Frameworks: K-means on the histogram of ``Y`` (256 bins from the
    image's smallest to its largest ``Y``), the centroids ``C_i`` starting one decade apart
@@ -361,7 +365,8 @@ class Krawczyk2005(AbstractOperator):
     """Krawczyk, Myszkowski and Seidel 2005 lightness perception (module docstring), as
     HDR Toolbox's ``KrawczykTMO`` computes it where that follows the paper.
 
-    Input: linear RGB, relative or absolute (scale invariant). Output: display-referred
+    Input: linear RGB, relative or absolute (scale invariant but for the histograms'
+    binning: module docstring). Output: display-referred
     linear RGB, the luminance in ``[0.01, 1]`` (0 for black pixels); a saturated colour may
     have a channel above 1.
 
@@ -383,7 +388,7 @@ class Krawczyk2005(AbstractOperator):
     """
 
     reference: ClassVar[str] = REFERENCE
-    scale_invariant: ClassVar[bool] = True
+    scale_invariant: ClassVar[bool] = False  # the fixed-grid histograms (module docstring)
     default_fit_params: ClassVar[tuple[str, ...]] = ("articulation_sigma",)
 
     articulation_sigma: Array = parameter(

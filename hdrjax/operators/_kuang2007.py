@@ -94,6 +94,7 @@ from ._base import (
     chromaticities_field,
     estimated,
     fill,
+    filled_with_first_valid,
     parameter,
     register,
     weights_field,
@@ -317,8 +318,7 @@ class Kuang2007(AbstractOperator):
         valid = p.valid()
         rgb = p.rgb
         if not p.clean:  # bad pixels: the first finite pixel's value (module docstring)
-            first = jnp.argmax(valid.reshape(-1))
-            rgb = jnp.where(valid[..., None], rgb, rgb.reshape(-1, 3)[first][None, None, :])
+            rgb = filled_with_first_valid(rgb, valid)
         rgb = jnp.maximum(rgb, 0.0)
         # scaled so that L_max is L_peak: both sides by a power of two first (exact), so
         # that neither the quotient nor its derivative leaves the float range

@@ -75,11 +75,11 @@ from ._base import (
     checked_statistics,
     estimated,
     fill,
+    filled_with_first_valid,
     parameter,
     register,
     weights_field,
 )
-from ._fattal2002 import _filled
 
 REFERENCE = (
     "Lischinski, Farbman, Uyttendaele, Szeliski 2006, Interactive local adjustment of tonal"
@@ -423,7 +423,9 @@ class Lischinski2006(AbstractOperator):
         assert self.zone_origin is not None and self.zone_exposures is not None
         dt = p.rgb.dtype
         # (a luminance of channels at the float maximum may round to +Inf)
-        Y = jnp.clip(p.L if p.clean else _filled(p.L, p.valid()), 0.0, jnp.finfo(dt).max)
+        Y = jnp.clip(
+            p.L if p.clean else filled_with_first_valid(p.L, p.valid()), 0.0, jnp.finfo(dt).max
+        )
         # zone of each pixel (0: below the first), a constant for jax.grad
         Yc = jax.lax.stop_gradient(Y)
         pos = Yc > 0

@@ -77,6 +77,9 @@ NOT_DIFFERENTIABLE = {
     "merge_distance": "krawczyk2005: threshold of the discrete merging of frameworks",
     "min_probability": "krawczyk2005: threshold of the discrete merging of frameworks",
     "surround": "kuang2007: choice of the viewing surround's lightness exponent (string)",
+    "references": "paris2011: number of reference intensities (integer; the scan's length)",
+    "clip_percent": "paris2011: percent of pixels outside the display range; static, it sizes"
+    " the percentile's partial selection",
 }
 
 # Array parameters that select a branch: their derivative is 0 (a step), checked as
@@ -122,6 +125,11 @@ CASES = [
         "fattal2002",
         dict(alpha=1.2, beta=0.85, gamma=0.7, saturation=0.6, noise=0.01),
         ("alpha", "beta", "gamma", "saturation", "noise"),
+    ),
+    (
+        "paris2011",
+        dict(sigma_r=0.8, alpha=0.8, beta=0.3, contrast=80.0),
+        ("sigma_r", "alpha", "beta", "contrast"),
     ),
     (
         "durand2002",
