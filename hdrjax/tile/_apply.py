@@ -182,7 +182,10 @@ def apply(
 
     Memory: the input, ``out`` and two windows with the step's temporaries (one in flight
     while the previous one is copied out). With ``np.memmap`` input and output the image
-    need not fit in memory.
+    need not fit in memory. ``out`` may be ``image`` itself, also for a step with a halo:
+    then the input rows that later windows still read are copied before their results
+    overwrite them (a band of one row of windows, and the rows above it that the next
+    band reads), so the run needs the image once plus about two bands, not twice the image.
 
     Args:
         step: :class:`Median`, :class:`Mean`, :class:`Tonemap`, :class:`Glare` or
@@ -197,7 +200,7 @@ def apply(
             merged); ``None`` computes them from the tiles first (a first pass).
         out: preallocated result (e.g. ``np.memmap``), the image's shape; a new float32
             (float64 for float64 input under x64) array by default. May be ``image``
-            itself for a pointwise step (halo 0).
+            itself (in place; the result equals the one into a separate array).
         progress: a progress bar over the tiles (tqdm) where a person watches: a
             terminal or a Jupyter notebook (never in a pipe or a log), and only for a run
             that lasts over a second. Ctrl-C stops the run between two tiles.
@@ -207,7 +210,7 @@ def apply(
 
     Raises:
         ValueError: on a bad tile (not positive, or smaller than the halo), a halo smaller
-            than the step's, an ``out`` of another shape, or in-place use with a halo.
+            than the step's, or an ``out`` of another shape.
     """
     step = check_step(step)
     shape = check_image(image)
@@ -218,16 +221,15 @@ def apply(
         out = np.empty(shape, stats_dtype(np.asarray(image[:1, :1]).dtype))
     elif tuple(out.shape) != shape:
         raise ValueError(f"out: expected shape {shape}, got {tuple(out.shape)}")
-    elif h != (0, 0) and np.shares_memory(out, image):
-        raise ValueError(f"out: in-place is only for pointwise steps; this one has halo {h}")
     bound = bind(step, image, shape, stats, tile)
     cdt = stats_dtype(np.asarray(image[:1, :1]).dtype)  # the filters' float promotion
+    read = _window_reader(image, grid, cdt, in_place=h != (0, 0) and _in_place(out, image))
     pending = None
     bar = progress_bar(
         grid, enabled=progress, unit="tile", desc=type(step).__name__, delay=_progress.DELAY_S
     )
     for r, c in bar:
-        window = jnp.asarray(np.asarray(image[r.window, c.window], dtype=cdt))
+        window = jnp.asarray(read(r, c))
         result = bound(window)  # dispatched asynchronously: overlaps the copy-out below
         if pending is not None:
             _store(out, *pending)
@@ -235,6 +237,78 @@ def apply(
     if pending is not None:
         _store(out, *pending)
     return out
+
+
+def _in_place(out, image) -> bool:
+    """Whether ``out`` is ``image`` (same memory, same layout); a ``ValueError`` when it
+    overlaps it otherwise."""
+    if not (isinstance(image, np.ndarray) and np.shares_memory(out, image)):
+        return False
+    if (
+        out.__array_interface__["data"][0] != image.__array_interface__["data"][0]
+        or out.strides != image.strides
+    ):
+        raise ValueError(
+            "out: overlaps image without being image itself; pass image (in place) or a"
+            " separate array"
+        )
+    return True
+
+
+def _window_reader(image, grid: list[tuple[Span, Span]], dtype, in_place: bool):
+    """``read(r, c)``: the window of tile ``(r, c)`` from the input as it was before the run.
+
+    Out of place the image is read directly; in place (a step with a halo writing into its
+    own input) through :class:`_Originals`."""
+    if not in_place:
+        return lambda r, c: np.asarray(image[r.window, c.window], dtype=dtype)
+    return _Originals(image, grid, dtype).read
+
+
+class _Originals:
+    """The input's original rows for an in-place run, in the grid's row-major order: each
+    band (one row span) is copied whole before any of its tiles is written, and the rows of
+    it that a later band's windows still read (their top halo, or more where the last window
+    is shifted inside the image) are kept from that copy; rows not yet written are read from
+    the image."""
+
+    def __init__(self, image, grid: list[tuple[Span, Span]], dtype):
+        self.image, self.dtype = image, dtype
+        # band start → the lowest window row of every later band
+        self.later: dict[int, int] = {}
+        lowest = int(np.shape(image)[0])
+        for r, _ in reversed(grid):
+            if r.start not in self.later:
+                self.later[r.start] = lowest
+                lowest = min(lowest, r.w_start)
+        self.start = -1
+        self.band = np.empty((0,))
+        self.kept = np.empty((0,))  # originals of rows [kept_lo, written)
+        self.kept_lo = 0
+        self.written = 0  # rows above this hold results once the band's tiles are stored
+
+    def _load(self, r: Span) -> None:
+        lo, hi = r.w_start, r.w_start + r.w_len
+        parts = []
+        if lo < self.written:  # rows already overwritten: their kept originals
+            parts.append(self.kept[lo - self.kept_lo : self.written - self.kept_lo])
+        parts.append(np.array(self.image[max(lo, self.written) : hi], dtype=self.dtype))
+        band = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        # the originals of rows [future, r.stop) that later bands read
+        future = self.later[r.start]
+        keep = []
+        if future < lo:
+            keep.append(self.kept[future - self.kept_lo : lo - self.kept_lo])
+        if max(future, lo) < r.stop:
+            keep.append(band[max(future, lo) - lo : r.stop - lo])
+        self.kept = np.concatenate(keep) if keep else np.empty((0,))
+        self.kept_lo, self.written = future, r.stop
+        self.start, self.band = r.start, band
+
+    def read(self, r: Span, c: Span) -> np.ndarray:
+        if r.start != self.start:
+            self._load(r)
+        return self.band[:, c.window]
 
 
 def _store(out, result, r: Span, c: Span) -> None:

@@ -85,6 +85,37 @@ def test_mean_into_memmap(tmp_path):
     assert _same(np.load(tmp_path / "out.npy"), mean_filter(x, 5, mode="mirror"))
 
 
+@pytest.mark.parametrize(
+    "size, shape, tile",
+    [
+        (5, (80, 64), (16, 24)),  # halo 2: every later band reads two rows of the one before
+        # halo 4, tile 8, 41 rows: the last band has 1 row, so its window (shifted inside
+        # the image) reads 7 rows of the band before it and 8 of the one before that
+        (9, (41, 30), (8, 8)),
+        (3, (30, 20), (64, 64)),  # one tile for the image
+    ],
+)
+def test_in_place_with_a_halo_equals_a_separate_output(size, shape, tile):
+    x = crop(*shape)
+    ref = T.apply(T.Mean(size, mode="reflect"), x, tile=tile)
+    y = x.copy()
+    got = T.apply(T.Mean(size, mode="reflect"), y, tile=tile, out=y)
+    assert got is y
+    assert _same(y, ref)
+    assert _same(ref, mean_filter(x, size, mode="reflect"))
+
+
+def test_in_place_with_a_halo_into_a_memmap(tmp_path):
+    x = crop(60, 50)
+    path = tmp_path / "image.npy"
+    np.save(path, x)
+    mm = np.load(path, mmap_mode="r+")
+    T.apply(T.Median(5), mm, tile=(16, 16), out=mm)
+    mm.flush()
+    del mm
+    assert _same(np.load(path), median_filter(x, 5))
+
+
 def test_neighbourhood_step_matches_scipy():
     def max3(w):  # 3×3 maximum with replicated edges, written by a user
         p = jnp.pad(w, 1, mode="edge")

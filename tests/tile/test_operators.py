@@ -56,6 +56,10 @@ def test_reinhard_local_tiles_equal_whole_image():
     assert step.halo(x.shape) == (r, r)
     got = T.apply(step, x, tile=(200, 256))  # windows 278×334 inside 512×512
     ref = np.asarray(op(x))
+    # in place: the same windows, read from the kept originals (the same programs)
+    y = x.copy()
+    T.apply(step, y, tile=(200, 256), out=y)
+    np.testing.assert_array_equal(y, got)
     # the scale choice "first i with |V_i| > ε" is discontinuous: where an activity lies
     # within rounding of ε, another FFT size may pick the neighbouring scale. Everywhere
     # else the results agree to RTOL32; the few others must be such borderline pixels
