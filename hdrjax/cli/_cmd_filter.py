@@ -94,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         step_type = htile.Mean if args.mean else htile.Median
         step = step_type(size=size, passes=args.passes, mode=args.mode, **settings)
-        out = htile.apply(step, x, tile=max(TILE, step.halo(x.shape)[0]), progress=True)
+        # in place where the decoded pixels are ours to overwrite: one image in memory
+        into = x if x.flags.writeable else None
+        out = htile.apply(step, x, tile=max(TILE, step.halo(x.shape)[0]), out=into, progress=True)
     dt = time.perf_counter() - t0
     try:
         with output_file(args) as path:
