@@ -38,6 +38,20 @@ Curves and error metrics:
   times float32's own rounding of the result (the floor that 1e-5 and tighter reach),
   far inside issue 21's criterion (a mean of 0.02 after sRGB encoding); each tenfold
   looser ``tol`` is about tenfold the error.
+- ``mantiuk2006 tol``: Mantiuk et al. 2006's Jacobi-preconditioned conjugate gradients
+  stopped at relative residual ``tol`` (float32) on 512 × 1024 crops (quick: 256 × 512);
+  error = max absolute display error (clipped to [0, 1]) vs the float64 solve converged to
+  ``tol = 1e-10``; the iterations each took are in ``extra``. The default and its reason:
+  the module docstring of ``hdrjax.operators._mantiuk2006``.
+- ``ferradans2011 tol``: Ferradans et al. 2011's contrast-enhancement iterations stopped
+  when an iteration changes the channels by at most ``tol`` (mean absolute change summed
+  over the channels; float32, default ``kernel_grid``) on 512 × 1024 crops (quick:
+  256 × 512); error = max absolute display error (clipped to [0, 1]) vs the float64
+  scheme iterated to ``tol = 1e-7`` with full-size convolutions (``kernel_grid`` larger
+  than the image); the iterations each took and the mean error in ``extra``. The default,
+  pfstmo's ``0.01``, is far from converged on purpose: it is pfstmo_ferradans11's stopping
+  rule, and the converged result misses issue 21's parity criterion against pfstmo
+  (tests/operators/test_ferradans2011.py).
 - ``jgt auto``: Reinhard 2002 with JGT automatic key/white measured exactly (sort), with the
   default histogram, or on a box-downscaled copy (``hdrjax.fit.downscale`` +
   ``Reinhard2002().measure``), then applied to the full image; error = max absolute display
@@ -528,6 +542,113 @@ def lischinski_curve(imgs: dict[str, np.ndarray], tols: tuple[float, ...], repea
     ]
 
 
+MANTIUK2006_TOLS = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5)
+"""``mantiuk2006``'s solver tolerances (relative residual) on its curve."""
+
+
+def _mantiuk2006_iterations(rgb: np.ndarray, tol: float) -> int:
+    """Conjugate-gradient iterations the float32 solve of ``mantiuk2006`` takes to ``tol``."""
+    from hdrjax.operators import _mantiuk2006 as M
+
+    op = hdrjax.make_operator("mantiuk2006")
+    L = jnp.asarray(luminance64(rgb), jnp.float32)
+    x = jnp.log10(jnp.maximum(L, jnp.max(L) * M.CLIP))
+    shapes = M.pyramid_shapes(x.shape)
+
+    @jax.jit
+    def count(x):
+        G = M.mapped_contrasts(x, shapes, op.contrast_factor, op.detail_factor, False)
+        ws = [M.weights_of(g) for g in G]
+        b = M.system_rhs(G, ws) - M.system_matvec(x, ws, shapes)
+        inv = 1.0 / M.system_diagonal(ws)
+
+        def mv(v):
+            return M.system_matvec(v, ws, shapes)
+
+        return M.conjugate_gradients(mv, b, inv, max_iterations=op.max_iterations, tol=tol)[1]
+
+    return int(count(x))
+
+
+def mantiuk2006_curve(imgs: dict[str, np.ndarray], tols: tuple[float, ...], repeats: int):
+    """``mantiuk2006``'s solve stopped at relative residual ``tol`` (float32, the default
+    iteration cap) vs the float64 solve converged to ``tol = 1e-10``: max absolute display
+    error; the iterations each took in ``extra``."""
+    default = hdrjax.make_operator("mantiuk2006").tol
+    apply = eqx.filter_jit(lambda o, x: o(x))
+    errs: dict[float, dict[str, float]] = {t: {} for t in tols}
+    times: dict[float, list[float]] = {t: [] for t in tols}
+    iters: dict[float, list[int]] = {t: [] for t in tols}
+    for name, rgb in imgs.items():
+        with x64():
+            op = hdrjax.make_operator("mantiuk2006", tol=1e-10, max_iterations=5000)
+            ref = np.asarray(apply(op, jnp.asarray(rgb, jnp.float64)), np.float64)
+        x = jnp.asarray(rgb, jnp.float32)
+        for tol in tols:
+            op = hdrjax.make_operator("mantiuk2006", tol=tol)
+            t, out = _timed(lambda op=op, x=x: apply(op, x), repeats)
+            errs[tol][name] = display_error(out, ref)
+            times[tol].append(t)
+            iters[tol].append(_mantiuk2006_iterations(rgb, tol))
+    return [
+        _point(
+            "mantiuk2006 tol",
+            f"{tol:g}",
+            errs[tol],
+            times[tol],
+            default=tol == default,
+            error_kind="max absolute display error (clipped to [0, 1]) vs the float64 solve"
+            " converged to tol 1e-10",
+            iterations=iters[tol],
+        )
+        for tol in tols
+    ]
+
+
+FERRADANS2011_TOLS = (3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
+"""``ferradans2011``'s stopping tolerances on its curve (``1e-2``: pfstmo's, the default)."""
+
+
+def ferradans2011_curve(imgs: dict[str, np.ndarray], tols: tuple[float, ...], repeats: int):
+    """``ferradans2011`` stopped at ``tol`` (float32) vs the float64 scheme converged to
+    ``tol = 1e-7`` with full-size convolutions: max absolute display error; iterations and
+    mean error in ``extra``."""
+    default = hdrjax.make_operator("ferradans2011").tol
+    apply = eqx.filter_jit(lambda o, x: o(x))
+    errs: dict[float, dict[str, float]] = {t: {} for t in tols}
+    means: dict[float, list[float]] = {t: [] for t in tols}
+    times: dict[float, list[float]] = {t: [] for t in tols}
+    iters: dict[float, list[int]] = {t: [] for t in tols}
+    for name, rgb in imgs.items():
+        with x64():
+            op = hdrjax.make_operator(
+                "ferradans2011", tol=1e-7, max_iterations=2000, kernel_grid=max(rgb.shape)
+            )
+            ref = np.asarray(apply(op, jnp.asarray(rgb, jnp.float64)), np.float64)
+        x = jnp.asarray(rgb, jnp.float32)
+        for tol in tols:
+            op = hdrjax.make_operator("ferradans2011", tol=tol, max_iterations=200)
+            t, out = _timed(lambda op=op, x=x: apply(op, x), repeats)
+            errs[tol][name] = display_error(out, ref)
+            means[tol].append(float(np.mean(np.abs(np.clip(np.asarray(out), 0, 1) - ref))))
+            times[tol].append(t)
+            iters[tol].append(int(op.iterations(x)))
+    return [
+        _point(
+            "ferradans2011 tol",
+            f"{tol:g}",
+            errs[tol],
+            times[tol],
+            default=tol == default,
+            error_kind="max absolute display error (clipped to [0, 1]) vs the float64 scheme"
+            " converged to tol 1e-7 with full-size convolutions",
+            iterations=iters[tol],
+            mean_error=means[tol],
+        )
+        for tol in tols
+    ]
+
+
 def run(quick: bool = False) -> list[dict]:
     """All curves; ``quick`` uses one image per curve and fewer settings (< 60 s)."""
     t0 = time.perf_counter()
@@ -544,6 +665,8 @@ def run(quick: bool = False) -> list[dict]:
         mults: tuple[float, ...] = (1.0, 4.0)
         jgt_sizes: tuple[int, ...] = (256,)
         lis_tols: tuple[float, ...] = (1e-3, 1e-4)
+        m06_tols: tuple[float, ...] = (1e-4,)
+        f11_tols: tuple[float, ...] = (1e-2, 1e-3)
     else:
         wide = images(WIDE, SHARED_WIDE)
         op_imgs = {k: v for k, v in wide.items() if k in WIDE}
@@ -556,9 +679,15 @@ def run(quick: bool = False) -> list[dict]:
         mults = (0.25, 0.5, 1.0, 2.0, 4.0)
         jgt_sizes = (1024, 512, 256, 128, 64)
         lis_tols = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
+        m06_tols = MANTIUK2006_TOLS
+        f11_tols = FERRADANS2011_TOLS
     median_img = load("cornell_box.exr")
     assert median_img is not None
     median_img = median_img[128:384, 128:384] if quick else median_img
+    # even sizes (every pyramid level a 2 × 2 mean)
+    m06_size = (256, 512) if quick else (512, 1024)
+    m06_names = ("venice_sunset_1k.hdr",) if quick else ("venice_sunset_1k.hdr", "cornell_box.exr")
+    m06_imgs = {k: v[: m06_size[0], : m06_size[1]] for k, v in images(m06_names).items()}
     steps: list[tuple[str, Callable[[], list[dict]]]] = [
         ("percentiles", lambda: percentile_curve(wide, bins, repeats)),
         ("operators", lambda: operator_curves(op_imgs, ops, repeats)),
@@ -567,6 +696,8 @@ def run(quick: bool = False) -> list[dict]:
         ("median", lambda: median_curve(median_img, 5, repeats)),
         ("jgt", lambda: jgt_curve(wide, jgt_sizes, repeats)),
         ("lischinski2006", lambda: lischinski_curve(envs, lis_tols, repeats)),
+        ("mantiuk2006", lambda: mantiuk2006_curve(m06_imgs, m06_tols, repeats)),
+        ("ferradans2011", lambda: ferradans2011_curve(m06_imgs, f11_tols, repeats)),
     ]
     recs: list[dict] = []
     for what, step in steps:

@@ -94,6 +94,15 @@ OPERATORS: tuple[Entry, ...] = (
     Entry("pattanaik2000", {}, pfstmo="pfstmo_pattanaik00"),
     Entry("durand2002", {}, pfstmo="pfstmo_durand02", global_op=False),
     Entry("fattal2002", {}, pfstmo="pfstmo_fattal02", global_op=False),
+    Entry(
+        "mantiuk2006",
+        {},
+        pfstmo="pfstmo_mantiuk06",
+        # pfstmo's contrast factor and saturation (OpenCV's defaults are 0.7 and 1)
+        opencv=lambda cv2: cv2.createTonemapMantiuk(gamma=1.0, scale=0.1, saturation=0.8),
+        global_op=False,
+    ),
+    Entry("ferradans2011", {}, pfstmo="pfstmo_ferradans11", global_op=False),
     Entry("ashikhmin2002", {}, global_op=False),
     Entry("chiu1993", {}, global_op=False),
 )

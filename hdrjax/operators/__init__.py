@@ -47,6 +47,7 @@ from ._classic import (
 from ._drago2003 import Drago2003 as Drago2003
 from ._durand2002 import Durand2002 as Durand2002
 from ._fattal2002 import Fattal2002 as Fattal2002
+from ._ferradans2011 import Ferradans2011 as Ferradans2011
 from ._ferwerda1996 import Ferwerda1996 as Ferwerda1996
 from ._kimkautz2008 import KimKautz2008 as KimKautz2008
 from ._krawczyk2005 import Krawczyk2005 as Krawczyk2005
@@ -59,6 +60,7 @@ from ._linear import (
 )
 from ._lischinski2006 import Lischinski2006 as Lischinski2006
 from ._mai2011 import Mai2011 as Mai2011
+from ._mantiuk2006 import Mantiuk2006 as Mantiuk2006
 from ._mantiuk2008 import Mantiuk2008 as Mantiuk2008
 from ._paris2011 import Paris2011 as Paris2011
 from ._pattanaik2000 import (

@@ -62,11 +62,14 @@ NOT_DIFFERENTIABLE = {
     " jax.grad)",
     "sigma_s": "durand2002: spatial scale; sets the integer kernel radius and the halo",
     "max_segments": "durand2002: static bound on the bilateral filter's segments (integer)",
+    "mode": "mantiuk2006: contrast mapping or contrast equalisation (string)",
     "detail_level": "fattal2002: number of pyramid levels left unattenuated (integer)",
     "black_point": "fattal2002: percent of pixels below black; static, it sizes the percentile's"
     " partial selection",
     "white_point": "fattal2002: percent of pixels above white; static, it sizes the percentile's"
     " partial selection",
+    "kernel_grid": "ferradans2011: fewest samples of the convolutions' grid (integer; it sets"
+    " the box factors)",
     "s_max": "ashikhmin2002: number of blur scales (integer)",
     "threshold": "ashikhmin2002: threshold of the discrete scale selection",
     "sigma": "chiu1993: blur scale in pixels; sets the integer kernel width and the halo",
@@ -126,6 +129,13 @@ CASES = [
         dict(alpha=1.2, beta=0.85, gamma=0.7, saturation=0.6, noise=0.01),
         ("alpha", "beta", "gamma", "saturation", "noise"),
     ),
+    (  # through the solve (converged: the gradient is the solution's)
+        "mantiuk2006",
+        dict(
+            contrast_factor=0.15, saturation=0.7, detail_factor=1.2, max_iterations=500, tol=1e-12
+        ),
+        ("contrast_factor", "saturation", "detail_factor"),
+    ),
     (
         "paris2011",
         dict(sigma_r=0.8, alpha=0.8, beta=0.3, contrast=80.0),
@@ -145,6 +155,12 @@ CASES = [
         ("sigma_r", "base_contrast", "saturation", "L_min", "L_max", "L_low", "L_high"),
     ),
     ("chiu1993", dict(k=6.0, glare=0.7, glare_power=6.0), ("k", "glare", "glare_power")),
+    # a fixed number of iterations (tol 0): the stopping iteration is piecewise constant
+    (
+        "ferradans2011",
+        dict(rho=-1.5, inv_alpha=4.0, tol=0.0, max_iterations=3),
+        ("rho", "inv_alpha"),
+    ),
     ("krawczyk2005", dict(articulation_sigma=1.0), ("articulation_sigma",)),
     (
         "lischinski2006",
