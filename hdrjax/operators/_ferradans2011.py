@@ -123,8 +123,9 @@ def _row_max(x: Array) -> Array:
     """``jnp.max`` over the last axis of ``(C, N)``, whose derivative is the mean of the
     tangents at the elements within 4 ulps of the maximum: ``jnp.max``'s divides by the
     count of elements *equal* to it, which XLA:CPU can find to be 0 (NaN) when it computes
-    the elements twice, once contracted into fused multiply-adds (unoptimised code, as the
-    tests compile). ``argmax`` instead would be robust, and many times slower on XLA:CPU."""
+    the elements twice with different rounding (once contracted into fused multiply-adds:
+    seen with LLVM's optimisation level 0). ``argmax`` instead would be robust, and many
+    times slower on XLA:CPU."""
     return jnp.max(x, axis=-1)
 
 
