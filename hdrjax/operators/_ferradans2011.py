@@ -82,6 +82,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from .._fusion import written_out
 from .._srgb import srgb_decode
 from ._base import AbstractOperator, Prepared, filled_with_first_valid, parameter, register
 
@@ -227,11 +228,13 @@ def _interpolation_weights(factor: int, dtype) -> tuple[Array, Array, Array]:
 
 
 def _upsample(a: Array, factors: tuple[int, int]) -> Array:
-    """Periodic linear interpolation of coarse fields ``(C, h, w)`` to the phase layout
+    """Periodic linear interpolation of coarse fields ``(C, h + 2, w + 2)``, wrapped by one
+    sample on each side (:func:`contrast_coefficients`), to the phase layout
     ``(C, h, f_h, f_w, w)`` (:func:`to_phases`): each phase weighs the coarse sample's
     3 × 3 neighbourhood (one broadcast expression, which XLA fuses with its use; one for
     all the fields at once materialises them and ran twice as slow)."""
     fh, fw = factors
+    h, w = a.shape[-2] - 2, a.shape[-1] - 2
     wh = _interpolation_weights(fh, a.dtype)
     ww = _interpolation_weights(fw, a.dtype)
     out = 0.0
@@ -242,7 +245,7 @@ def _upsample(a: Array, factors: tuple[int, int]) -> Array:
             if fw == 1 and dw:
                 continue
             weight = (wh[i][:, None] * ww[j][None, :])[None, None, :, :, None]
-            shifted = jnp.roll(a, (dh, dw), axis=(-2, -1)) if dh or dw else a
+            shifted = a[:, 1 - dh : 1 - dh + h, 1 - dw : 1 - dw + w]
             out = out + weight * shifted[:, :, None, None, :]
     return out
 
@@ -263,11 +266,12 @@ def from_phases(x: Array) -> Array:
     return x.transpose(0, 1, 2, 4, 3).reshape(C, h * fh, w * fw)
 
 
-def contrast_term(u: Array, sigma: Array, shape: tuple[int, int]) -> Array:
-    """``R(u)`` of the module docstring (step 2) for ``u`` in [0, 1] in the phase layout
-    ``(C, h, f_h, f_w, w)`` of an ``(H, W) = shape`` image (:func:`to_phases`), before its
-    clip and normalisation: ``Σ_k c_k Σ_y w(x − y) (u(x) − u(y))^k`` by the convolutions
-    of the powers of ``u``, box-averaged to ``(h, w)``."""
+def contrast_coefficients(u: Array, sigma: Array, shape: tuple[int, int]) -> Array:
+    """The coefficients ``a_0 … a_6`` of ``R(u) = Σ_m a_m u^m`` (module docstring, step 2)
+    for ``u`` in [0, 1] in the phase layout ``(C, h, f_h, f_w, w)`` of an
+    ``(H, W) = shape`` image (:func:`to_phases`), from the convolutions of the powers of
+    ``u``: coarse fields ``(7, C, h + 2, w + 2)``, wrapped by one sample on each side for
+    the periodic interpolation."""
     C, h, fh, fw, w = u.shape
     H, W = shape
     powers = [u]
@@ -284,15 +288,26 @@ def contrast_term(u: Array, sigma: Array, shape: tuple[int, int]) -> Array:
     g_min = jnp.exp(-((H // 2) ** 2 + (W // 2) ** 2) / (2.0 * sigma**2))
     beta = (g_min * (H * W) / (sum_h * sum_w)).astype(u.dtype)
     M = (blurred - beta * means) / (1.0 - beta)  # (C, 7, h, w): moments M_1 … M_7
-    # R = Σ_m a_m u^m with a_m = Σ_k c_k C(k, m) (−1)^(k−m) M_(k−m), M_0 = 1
-    R = jnp.full_like(u, SLOPE_POLYNOMIAL[-1])
-    for m in range(6, -1, -1):
-        a = 0.0
+    # a_m = Σ_k c_k C(k, m) (−1)^(k−m) M_(k−m), M_0 = 1
+    a = []
+    for m in range(7):
+        a_m = jnp.zeros_like(M[:, 0])
         for k, c_k in zip((1, 3, 5, 7), SLOPE_POLYNOMIAL, strict=True):
             if k >= m:
                 term = c_k * math.comb(k, m) * (-1.0) ** (k - m)
-                a = a + (term if k == m else term * M[:, k - m - 1])
-        R = R * u + _upsample(a, (fh, fw))
+                a_m = a_m + (term if k == m else term * M[:, k - m - 1])
+        a.append(a_m)
+    return jnp.pad(jnp.stack(a), ((0, 0), (0, 0), (1, 1), (1, 1)), mode="wrap")
+
+
+def contrast_term(u: Array, coefficients: Array) -> Array:
+    """``R(u)`` of the module docstring (step 2), before its clip and normalisation, for
+    ``u`` in the phase layout (:func:`to_phases`) with :func:`contrast_coefficients`
+    (Horner's scheme over the interpolated fields)."""
+    factors = (u.shape[2], u.shape[3])
+    R = jnp.full_like(u, SLOPE_POLYNOMIAL[-1])
+    for m in range(6, -1, -1):
+        R = R * u + _upsample(coefficients[m], factors)
     return R
 
 
@@ -315,18 +330,24 @@ def enhance(
     target = (ALPHA * mean + BETA * I0) * TIME_STEP
     scale = 1.0 / (1.0 + TIME_STEP * (ALPHA + BETA))
 
-    @jax.checkpoint
-    def step(u):
-        R = jnp.clip(contrast_term(u, sigma, (H, W)), -1.0, 1.0)
+    def update(u, coefficients):
+        R = jnp.clip(contrast_term(u, coefficients), -1.0, 1.0)
         top = _row_max(jnp.abs(R).reshape(R.shape[0], -1)).reshape(-1, 1, 1, 1, 1)
         R = jnp.where(top > 0, R / jnp.where(top > 0, top, 1.0), 0.0)
         new = jnp.clip((u + target + (TIME_STEP * GAMMA) * R) * scale, 0.0, 1.0)
         change = jnp.sum(jnp.mean(jnp.abs(new - u), axis=axes))
         return new, change <= tol
 
+    @jax.checkpoint
+    def step(u, done):
+        # the wrapped fields written out: fused into the interpolation, their wrap costs a
+        # branch per pixel and tap (11× slower)
+        coefficients = contrast_coefficients(u, sigma, (H, W))
+        return written_out(~done, update, lambda v, _: (v, done), u, coefficients)
+
     def body(carry, _):
         u, done, n = carry
-        u, now = jax.lax.cond(done, lambda v: (v, done), step, u)
+        u, now = jax.lax.cond(done, lambda v, d: (v, d), step, u, done)
         return (u, now, n + jnp.where(done, 0, 1)), None
 
     init = (I0, jnp.asarray(False), jnp.asarray(0, jnp.int32))
