@@ -27,8 +27,9 @@ The steps, with ``Y`` the luminance (the image's units; ``ε_Y`` = ``offset``):
    are ``1 / (|Δℓ|^α + ε)``.
 4. Output ``C 2^f`` per channel (display-referred linear; the colour ratios kept).
 
-Solver: conjugate gradients with the Jacobi preconditioner, the operator applied
-matrix-free on the pixel grid (:func:`pcg`) inside ``lax.custom_linear_solve``, so that
+Solver: conjugate gradients with the Jacobi preconditioner (the operators' shared
+``conjugate_gradients``), the operator applied matrix-free on the pixel grid, inside
+``lax.custom_linear_solve``, so that
 ``jax.grad`` differentiates the solution implicitly, exactly for the solved system (the
 image and ``α``, ``λ``, ``ε``, ``w`` included); stopped when the residual is below ``tol``
 times the targets' norm or after ``max_iterations``. The system's smallest eigenvalue is
@@ -59,7 +60,6 @@ infinite halo (:meth:`Lischinski2006.halo`) and runs on the whole image only.
 """
 
 import math
-from collections.abc import Callable
 from typing import ClassVar
 
 import jax
@@ -80,6 +80,7 @@ from ._base import (
     register,
     weights_field,
 )
+from ._cg import conjugate_gradients
 
 REFERENCE = (
     "Lischinski, Farbman, Uyttendaele, Szeliski 2006, Interactive local adjustment of tonal"
@@ -194,46 +195,6 @@ def degree(wx: Array, wy: Array) -> Array:
     )
 
 
-def pcg(
-    matvec: Callable[[Array], Array],
-    b: Array,
-    inv_diag: Array,
-    *,
-    tolerance: float,
-    max_iterations: int,
-) -> Array:
-    """``x`` with ``matvec(x) = b`` (symmetric positive definite) by conjugate gradients
-    preconditioned with ``inv_diag`` (Jacobi), from ``x = 0``, until
-    ``‖r‖ ≤ tolerance ‖b‖`` or ``max_iterations``. ``b`` is scaled by a power of two to a
-    largest magnitude near 1 first: a cotangent of tiny values (the gradient of a dim
-    image's output) would otherwise make ``r · M r`` subnormal, flushed to 0 (then 0 / 0)."""
-    c = inverse_pow2(jnp.max(jnp.abs(b)))
-    b = b * c
-    stop = tolerance**2 * jnp.sum(b * b)
-    tiny = jnp.finfo(b.dtype).tiny
-
-    def cond(state):
-        k, _, r, _, _ = state
-        return (k < max_iterations) & (jnp.sum(r * r) > stop)
-
-    def body(state):
-        k, x, r, p, rz = state
-        Ap = matvec(p)
-        pAp = jnp.sum(p * Ap)
-        a = jnp.where(pAp > tiny, rz / jnp.where(pAp > tiny, pAp, 1.0), 0.0)
-        x = x + a * p
-        r = r - a * Ap
-        z = inv_diag * r
-        rz_new = jnp.sum(r * z)
-        beta = jnp.where(rz > tiny, rz_new / jnp.where(rz > tiny, rz, 1.0), 0.0)
-        return k + 1, x, r, z + beta * p, rz_new
-
-    z = inv_diag * b
-    state = (jnp.zeros((), jnp.int32), jnp.zeros_like(b), b, z, jnp.sum(b * z))
-    x = jax.lax.while_loop(cond, body, state)[1]
-    return x / c
-
-
 def propagate(
     g: Array,
     ell: Array,
@@ -245,7 +206,8 @@ def propagate(
     max_iterations: int,
 ) -> Array:
     """``f`` with ``(I + smoothness · L_h) f = g`` (module docstring, step 3;
-    ``smoothness = λ / w``) by :func:`pcg` inside ``lax.custom_linear_solve``, so that
+    ``smoothness = λ / w``) by Jacobi-preconditioned conjugate gradients inside
+    ``lax.custom_linear_solve``, so that
     ``jax.grad`` differentiates the solution implicitly (one more solve of the same
     symmetric system), not through the iterations."""
     wx, wy = edge_weights(ell, alpha, epsilon)
@@ -256,7 +218,10 @@ def propagate(
         return f + laplacian(f, wx, wy)
 
     def solve(mv, rhs):
-        return pcg(mv, rhs, inv_diag, tolerance=tolerance, max_iterations=max_iterations)
+        f, _, _ = conjugate_gradients(
+            mv, rhs, inv_diag, tol=tolerance, max_iterations=max_iterations
+        )
+        return f
 
     return jax.lax.custom_linear_solve(matvec, g, solve, symmetric=True)
 
@@ -456,7 +421,6 @@ __all__ = [
     "Lischinski2006",
     "edge_weights",
     "laplacian",
-    "pcg",
     "propagate",
     "reinhard_alpha",
     "zone_exposures",

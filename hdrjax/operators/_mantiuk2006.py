@@ -111,6 +111,7 @@ from ._base import (
     register,
     weights_field,
 )
+from ._cg import conjugate_gradients
 
 REFERENCE = (
     "Mantiuk, Myszkowski, Seidel 2006, A perceptual framework for contrast processing of high"
@@ -439,44 +440,6 @@ def system_diagonal(ws: list[tuple[Array, Array]]) -> Array:
     return acc
 
 
-def conjugate_gradients(
-    matvec, b: Array, inv_diag: Array, *, max_iterations: int, tol: float
-) -> tuple[Array, Array, Array]:
-    """Jacobi-preconditioned conjugate gradients for ``A y = b`` from ``y = 0``, until
-    ``|r| ≤ tol |b|`` (at least 100 rounding errors) or ``max_iterations`` iterations. ``b``'s
-    mean is removed first (constants are ``A``'s null space). Returns the solution, the
-    iterations run and ``|r| / |b|``."""
-    b = b - jnp.mean(b)
-    bb = jnp.vdot(b, b)
-    # below a few rounding errors the recurrence loses orthogonality and diverges
-    floor = 100 * float(jnp.finfo(b.dtype).eps)
-    stop = max(tol, floor) ** 2 * bb
-
-    def cond(s):
-        *_, rr, i = s
-        return (i < max_iterations) & (rr > stop)
-
-    # under vmap the loop runs until every frame is done; JAX's batched while loop keeps
-    # the state of a frame done earlier (a select on its predicate), so each frame gets the
-    # result it gets alone
-    def step(s):
-        y, r, p, rz, _, i = s
-        q = matvec(p)
-        pq = jnp.vdot(p, q)
-        alpha = jnp.where(pq > 0, rz / jnp.where(pq > 0, pq, 1.0), 0.0)
-        y = y + alpha * p
-        r = r - alpha * q
-        z = r * inv_diag
-        rz_new = jnp.vdot(r, z)
-        beta = jnp.where(rz > 0, rz_new / jnp.where(rz > 0, rz, 1.0), 0.0)
-        return y, r, z + beta * p, rz_new, jnp.vdot(r, r), i + 1
-
-    z = b * inv_diag
-    init = (jnp.zeros_like(b), b, z, jnp.vdot(b, z), bb, jnp.asarray(0))
-    y, _, _, _, rr, i = jax.lax.while_loop(cond, step, init)
-    return y, i, jnp.sqrt(rr / jnp.where(bb > 0, bb, 1.0))
-
-
 def solve(
     x: Array,
     G: list[tuple[Array, Array]],
@@ -496,6 +459,8 @@ def solve(
         return system_matvec(v, ws, shapes)
 
     def cg(mv, rhs):
+        # constants are A's null space: b's mean removed
+        rhs = rhs - jnp.mean(rhs)
         return conjugate_gradients(mv, rhs, inv_diag, max_iterations=max_iterations, tol=tol)[0]
 
     x0 = jax.lax.stop_gradient(x)
@@ -634,7 +599,6 @@ __all__ = [
     "discrimination",
     "weber_fraction",
     "weber_fractions",
-    "conjugate_gradients",
     "mapped_contrasts",
     "pyramid_shapes",
     "response",
