@@ -67,7 +67,8 @@ SSIM_TIGHT, MAD_TIGHT = 0.996, 0.013
 """Tighter bounds, just outside the measured worst (0.9975, 0.0112)."""
 RTOL64 = 1e-6
 TILE_RTOL = 2e-5
-"""Tiles against the whole image, float32: the banded block products sum in another order."""
+"""Tiles against the whole image, float32: XLA may order or contract the sums differently
+for another shape."""
 
 
 @functools.cache

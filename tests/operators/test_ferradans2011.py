@@ -25,7 +25,6 @@ paper's scheme has no contrast to enhance there: the operator's output is finite
 
 import functools
 import math
-import sys
 from pathlib import Path
 
 import equinox as eqx
@@ -37,24 +36,13 @@ import pytest
 import hdrjax
 from hdrjax.operators import _ferradans2011 as F
 
-from ..conftest import DATA
 from . import test_durand2002 as durand
 
 HERE = Path(__file__).resolve().parent
 FIXTURES = HERE / "fixtures" / "pfstmo" / "ferradans2011.npz"
-sys.path.insert(0, str(HERE / "fixtures"))
-from peers import downscaled  # noqa: E402
-
-sys.path.pop(0)
-
-IMAGES = (
-    ("rooitou_park_1k.hdr", 4),
-    ("venice_sunset_1k.hdr", 4),
-    ("MtTamNorth.exr", 4),
-    ("cornell_box.exr", 2),
-)
-"""The fixture script's images and box factors (128 × 256 each)."""
-SHAPE = (128, 256)
+IMAGES, SHAPE = durand.IMAGES, durand.SHAPE
+"""The fixture script's images and box factors (128 × 256 each): durand2002's."""
+inputs = durand.inputs
 SSIM_TIGHT, MAD_TIGHT, MAX_TIGHT = 0.99995, 1e-4, 5e-4
 """Tighter bounds than issue 21's, outside the measured worst (0.999998, 4.5e-5, 1.7e-4)."""
 RTOL64 = 1e-6
@@ -66,11 +54,6 @@ GRAD_RTOL = 1e-5
 def fixtures() -> dict[str, np.ndarray]:
     with np.load(FIXTURES) as f:
         return {k: f[k] for k in f.files}
-
-
-@functools.cache
-def inputs() -> np.ndarray:
-    return np.stack([downscaled(DATA / n, SHAPE, k) for n, k in IMAGES])
 
 
 @functools.cache
