@@ -244,6 +244,8 @@ class Kuang2007(AbstractOperator):
 
     reference: ClassVar[str] = REFERENCE
     scale_invariant: ClassVar[bool] = True
+    # the bilateral filter skips unused nodes by lax.cond, a select under vmap
+    frames_in_sequence: ClassVar[bool] = True
     default_fit_params: ClassVar[tuple[str, ...]] = ("p",)
 
     L_peak: Array = parameter(
