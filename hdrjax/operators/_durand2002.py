@@ -131,12 +131,21 @@ cache, where whole image rows (79 rows of 8 KiB at 2048 wide) overflow the secon
 and made the vertical pass 8× slower than the horizontal one."""
 
 
-def _taps(sigma_s: float) -> np.ndarray:
-    """The normalised kernel's taps ``k_0 … k_r`` (centre first; it is symmetric)."""
+def _taps(sigma_s: float, size: int) -> np.ndarray:
+    """The normalised kernel's taps ``k_0 … k_r`` (centre first; it is symmetric) for an
+    axis of ``size`` pixels: those that reach past ``size − 1`` pixels are dropped, as they
+    only ever weigh the zeros around the image (the same sums, with no term of ``0 · x``:
+    an 8 × 8 image needs 15 taps a pass, not 79)."""
     r = spatial_radius(sigma_s)
     x = np.arange(r + 1, dtype=np.float64)
     k = np.exp(-0.5 * (x / spatial_sigma(sigma_s)) ** 2)
-    return k / (k[0] + 2.0 * np.sum(k[1:]))
+    return (k / (k[0] + 2.0 * np.sum(k[1:])))[: max(1, min(r, size - 1) + 1)]
+
+
+def _strip(width: int) -> int:
+    """Width of the vertical pass's column strips for an image ``width`` pixels wide:
+    :data:`STRIP`, or the whole width when it is narrower (no columns of zeros)."""
+    return min(STRIP, max(1, width))
 
 
 def _fir(p: Array, taps: np.ndarray, axis: int) -> Array:
@@ -154,46 +163,63 @@ def _fir(p: Array, taps: np.ndarray, axis: int) -> Array:
     return out
 
 
-def _to_strips(x: Array) -> Array:
-    """``(..., H, W)`` with ``W`` a multiple of :data:`STRIP` → ``(..., W / STRIP, H, STRIP)``."""
+def _to_strips(x: Array, strip: int) -> Array:
+    """``(..., H, W)`` with ``W`` a multiple of ``strip`` → ``(..., W / strip, H, strip)``."""
     *lead, h, w = x.shape
-    x = x.reshape(*lead, h, w // STRIP, STRIP)
+    x = x.reshape(*lead, h, w // strip, strip)
     return jnp.moveaxis(x, -2, -3)
 
 
 def _from_strips(x: Array) -> Array:
     """The inverse of :func:`_to_strips`."""
-    *lead, s, h, _ = x.shape
-    return jnp.moveaxis(x, -3, -2).reshape(*lead, h, s * STRIP)
+    *lead, s, h, strip = x.shape
+    return jnp.moveaxis(x, -3, -2).reshape(*lead, h, s * strip)
 
 
-def _separable(x: Array, taps: np.ndarray, when: Array) -> Array:
-    """The kernel over both image axes of ``x`` (``(..., H + 2r, W' + 2r)``, padded with
-    zeros, ``W'`` a multiple of :data:`STRIP`), returned as strips
-    (``(..., W' / STRIP, H, STRIP)``): the horizontal pass along rows, then the vertical
-    pass along the strips' columns, where ``when`` (zeros otherwise). The strips are
-    written out before the vertical pass (:func:`~hdrjax._fusion.written_out`): fused
-    into it, their transpose costs a cache miss per tap, as slow as whole rows."""
-    rows = _to_strips(_fir(x, taps, -1))
-    r = len(taps) - 1
+def _separable(x: Array, taps: tuple[np.ndarray, np.ndarray], strip: int, when: Array) -> Array:
+    """The kernel over both image axes of ``x`` (``(..., H + 2 r_v, W' + 2 r_h)``, padded
+    with zeros by :func:`_padding`, ``W'`` a multiple of ``strip``; ``taps``: the vertical
+    and the horizontal pass's), returned as strips (``(..., W' / strip, H, strip)``): the
+    horizontal pass along rows, then the vertical pass along the strips' columns, where
+    ``when`` (zeros otherwise). The strips are written out before the vertical pass
+    (:func:`~hdrjax._fusion.written_out`): fused into it, their transpose costs a cache miss
+    per tap, as slow as whole rows."""
+    vertical, horizontal = taps
+    rows = _to_strips(_fir(x, horizontal, -1), strip)
+    r = len(vertical) - 1
     shape = (*rows.shape[:-2], rows.shape[-2] - 2 * r, rows.shape[-1])
-    return written_out(when, lambda s: _fir(s, taps, -2), lambda s: jnp.zeros(shape, s.dtype), rows)
+    return written_out(
+        when, lambda s: _fir(s, vertical, -2), lambda s: jnp.zeros(shape, s.dtype), rows
+    )
 
 
-def _padding(shape: tuple[int, int], r: int) -> tuple[tuple[int, int], tuple[int, int]]:
+def _kernel(sigma_s: float, shape: tuple[int, int]) -> tuple[tuple[np.ndarray, np.ndarray], int]:
+    """The vertical and horizontal taps and the strip width for an ``(H, W)`` image."""
+    h, w = shape
+    return (_taps(sigma_s, h), _taps(sigma_s, w)), _strip(w)
+
+
+def _padding(
+    shape: tuple[int, int], taps: tuple[np.ndarray, np.ndarray], strip: int
+) -> tuple[tuple[int, int], tuple[int, int]]:
     """The zero padding of an ``(H, W)`` image for :func:`_separable`."""
     h, w = shape
-    return (r, r), (r, r + -(-w // STRIP) * STRIP - w)
+    rv, rh = len(taps[0]) - 1, len(taps[1]) - 1
+    return (rv, rv), (rh, rh + -(-w // strip) * strip - w)
 
 
-def gaussian_blur(x: Array, sigma_s: float) -> Array:
+def gaussian_blur(x: Array, sigma_s: float, when: Array | None = None) -> Array:
     """``f ⊗ x`` over the last two axes: the truncated isotropic Gaussian of standard
     deviation ``σ_s / π`` pixels, zero outside the image (a normalised convolution's
-    numerator or denominator)."""
-    taps = _taps(sigma_s)
+    numerator or denominator). ``when``: a traced boolean, zeros where false; traced code
+    should pass one (``None`` is a constant true, with which XLA may fuse the column
+    strips' transpose into the vertical pass, the slow layout of
+    :func:`~hdrjax._fusion.written_out`)."""
     h, w = x.shape[-2:]
-    pad = [(0, 0)] * (x.ndim - 2) + list(_padding((h, w), len(taps) - 1))
-    out = _separable(jnp.pad(x, pad), taps, jnp.asarray(True))
+    taps, strip = _kernel(sigma_s, (h, w))
+    pad = [(0, 0)] * (x.ndim - 2) + list(_padding((h, w), taps, strip))
+    on = jnp.asarray(True) if when is None else when
+    out = _separable(jnp.pad(x, pad), taps, strip, on)
     return _from_strips(out)[..., :w]
 
 
@@ -219,13 +245,13 @@ def bilateral_base(
     n = jnp.clip(jnp.ceil(span / sigma_r), 1, max_segments)
     step = jnp.where(span > 0, span / n, 1.0)
     t = jnp.clip((I - lo) / step, 0.0, n)
-    taps = _taps(sigma_s)
-    (top, bottom), (left, right) = _padding(I.shape, len(taps) - 1)
+    taps, strip = _kernel(sigma_s, I.shape)
+    (top, bottom), (left, right) = _padding(I.shape, taps, strip)
     w = I.shape[1]
     # the kernel's inputs padded with absent pixels; the blend's in the blur's strips
     I_pad = jnp.pad(I, ((top, bottom), (left, right)))
     v_pad = jnp.pad(valid.astype(I.dtype), ((top, bottom), (left, right)))
-    t_s = _to_strips(jnp.pad(t, ((0, 0), (0, right - left))))
+    t_s = _to_strips(jnp.pad(t, ((0, 0), (0, right - left))), strip)
     seg = jnp.clip(jnp.floor(t_s), 0, n - 1)
     frac = t_s - seg
 
@@ -233,7 +259,7 @@ def bilateral_base(
         i_j = lo + j * step
         d = I_pad - i_j
         G = jnp.exp(-((d / sigma_r) ** 2)) * v_pad
-        KH = _separable(jnp.stack([G, G * d]), taps, u)
+        KH = _separable(jnp.stack([G, G * d]), taps, strip, u)
         K = KH[0]
         ok = K > jnp.finfo(I.dtype).tiny
         J = i_j + jnp.where(ok, quotient(KH[1], jnp.where(ok, K, 1.0)), 0.0)

@@ -41,7 +41,13 @@ from scipy.ndimage import convolve1d, gaussian_filter
 import hdrjax
 import hdrjax.tile as T
 from hdrjax._srgb import srgb_encode
-from hdrjax.operators._durand2002 import bilateral_base, spatial_radius, spatial_sigma
+from hdrjax.operators._durand2002 import (
+    _kernel,
+    bilateral_base,
+    gaussian_blur,
+    spatial_radius,
+    spatial_sigma,
+)
 
 from ..conftest import DATA
 
@@ -188,6 +194,29 @@ def test_bilateral_matches_numpy_model(x64):
         max_segments=64,
     )
     np.testing.assert_allclose(np.asarray(got)[valid], ref[valid], rtol=RTOL64)
+
+
+@pytest.mark.parametrize("shape", [(8, 8), (1, 9), (7, 1), (50, 45), (90, 130)])
+def test_blur_cuts_its_kernel_to_the_image(shape, x64):
+    """``gaussian_blur`` keeps only the taps an axis can use (``min(r, size − 1)``: 8 of
+    the 40 for an 8-pixel axis) and its column strips no wider than the image, and equals
+    the whole kernel (``r = 39`` for ``σ_s = 40``) applied densely with zeros outside."""
+    sigma_s = 40.0
+    r = spatial_radius(sigma_s)
+    x = np.random.default_rng(3).lognormal(0.0, 1.0, (2, *shape))
+    k = np.exp(-0.5 * (np.arange(r + 1) / (sigma_s / np.pi)) ** 2)
+    k /= k[0] + 2.0 * k[1:].sum()
+
+    def dense(n):  # (n, n): weight of input j at output i, zero beyond the radius
+        d = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
+        return np.where(d <= r, k[np.minimum(d, r)], 0.0)
+
+    ref = dense(shape[0]) @ x @ dense(shape[1]).T
+    got = gaussian_blur(jnp.asarray(x), sigma_s, jnp.asarray(True))
+    np.testing.assert_allclose(np.asarray(got), ref, rtol=RTOL64, atol=1e-300)
+    (vertical, horizontal), strip = _kernel(sigma_s, shape)
+    assert (len(vertical), len(horizontal)) == (min(r, shape[0] - 1) + 1, min(r, shape[1] - 1) + 1)
+    assert strip == min(64, shape[1])
 
 
 def test_tiles_equal_the_whole_image():
