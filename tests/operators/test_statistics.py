@@ -2,6 +2,7 @@
 statistics of two parts of an image merged and bound map the whole image as the operator
 measuring the whole image does; statistics merge exactly; bind is checked."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -13,6 +14,9 @@ from hdrjax._stats import Statistics, measure, summarise
 from .cases import make, natural
 
 NAMES = hdrjax.operator_names()
+
+
+_bind = eqx.filter_jit(lambda op, stats: op.bind(stats))
 
 
 def _image():
@@ -33,7 +37,9 @@ def test_merged_halves_bind_as_the_whole_image(name):
         stats = None
     else:
         stats = top.merge(bottom)
-    bound = op.bind(stats)
+    # compiled as hdrjax.tile binds (eagerly, each of bind's many small operations
+    # compiles apart: about 80 programs an operator)
+    bound = _bind(op, stats)
     estimated = [i.name for i in hdrjax.operators.parameter_info(op) if i.estimated]
     left = [n for n in estimated if getattr(bound, n) is None]
     assert not left, f"{name}: estimated parameters still unset after bind: {left}"
