@@ -27,13 +27,17 @@ def test_eager_calls_trace_only_the_branch_taken(name, monkeypatch):
     assert traced, "the masked path was not taken for NaN/Inf pixels"
     both = jax.jit(lambda v: op(v))  # traced: both branches under lax.cond
     # rounding only; mantiuk2008's iteration stops when its curve settles, so the rounding
-    # of the luminance it was given can move the last step (1.1e-4 here)
+    # of the luminance it was given can move the last step: 1.1e-4 relative on one CPU,
+    # 2.2e-4 absolute at dark pixels (0 in one, 2.2e-4 in the other) on another (the code
+    # XLA:CPU generates differs between processors): 5e-4 of the display's range, an
+    # eighth of an 8-bit code value
     rtol = 5e-4 if name == "mantiuk2008" else 1e-5
-    np.testing.assert_allclose(out, np.asarray(both(clean)), rtol=rtol, atol=1e-6)
+    atol = 5e-4 if name == "mantiuk2008" else 1e-6
+    np.testing.assert_allclose(out, np.asarray(both(clean)), rtol=rtol, atol=atol)
     ref = np.asarray(both(bad))
     np.testing.assert_array_equal(np.isnan(out_bad), np.isnan(ref))
     ok = ~np.isnan(ref)
-    np.testing.assert_allclose(out_bad[ok], ref[ok], rtol=rtol, atol=1e-6)
+    np.testing.assert_allclose(out_bad[ok], ref[ok], rtol=rtol, atol=atol)
 
 
 def test_large_images_run_the_whole_function(monkeypatch):
